@@ -1,0 +1,2 @@
+//! Kotlin bindings for Trailprint (filled in by the bindings issue).
+uniffi::setup_scaffolding!();

@@ -1,0 +1,637 @@
+//! Buildings: the `survey-building/1` exchange format (SPEC section 7) and the validated
+//! building graph the rest of the core works on (SPEC section 1).
+//!
+//! [`BuildingFile`] mirrors the JSON exactly (serde); [`Building::from_file`] checks every
+//! rule and builds a petgraph graph whose node index equals the vertex index. Vertex ids
+//! are the stable names; indices never leave the process.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use petgraph::graph::{NodeIndex, UnGraph};
+use serde::{Deserialize, Serialize};
+
+use crate::gp::{Kernel, Point};
+use crate::{Error, Result};
+
+/// The only format version this code reads and writes.
+pub const FORMAT: &str = "survey-building/1";
+
+/// Shortest allowed edge, metres (SPEC section 1).
+pub const MIN_EDGE_LENGTH: f64 = 1e-6;
+
+/// A floor as written in the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FloorSpec {
+    pub id: i64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+}
+
+/// A vertex as written in the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VertexSpec {
+    pub id: String,
+    pub x: f64,
+    pub y: f64,
+    #[serde(default)]
+    pub floor: i64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+}
+
+/// An undirected edge as written in the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeSpec {
+    pub a: String,
+    pub b: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<f64>,
+}
+
+/// A fingerprint: a position and the RSS (dBm) of the access points heard there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fingerprint {
+    pub x: f64,
+    pub y: f64,
+    #[serde(default)]
+    pub floor: i64,
+    #[serde(default)]
+    pub rss: BTreeMap<String, f64>,
+}
+
+impl Fingerprint {
+    pub fn point(&self) -> Point {
+        Point::new(self.x, self.y, self.floor)
+    }
+}
+
+/// The JSON document `survey-building/1`, field for field.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BuildingFile {
+    pub format: String,
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floors: Option<Vec<FloorSpec>>,
+    pub vertices: Vec<VertexSpec>,
+    pub edges: Vec<EdgeSpec>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pilot: Vec<Fingerprint>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub test_points: Vec<Fingerprint>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dense_survey: Vec<Fingerprint>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernel: Option<Kernel>,
+}
+
+impl BuildingFile {
+    /// Parses JSON text; `origin` names the source in errors. Type errors carry the JSON
+    /// path of the offending value (`vertices[3].x`).
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            Error::Parse {
+                origin: origin.to_string(),
+                path: if path == "." { "$".into() } else { path },
+                message: inner.to_string(),
+            }
+        })
+    }
+
+    /// Reads and parses a file.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Pretty JSON text of the document.
+    pub fn to_json(&self) -> String {
+        // Serialising plain data with string keys cannot fail.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+}
+
+/// A floor of a validated building.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Floor {
+    pub id: i64,
+    pub name: Option<String>,
+}
+
+/// A vertex of a validated building.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vertex {
+    pub id: String,
+    pub pos: Point,
+    pub label: Option<String>,
+}
+
+/// An edge of a validated building, between vertex indices `a < b` or in file order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Edge {
+    pub a: usize,
+    pub b: usize,
+    pub length: f64,
+    /// Whether the length was given in the file (kept for a faithful export).
+    pub explicit_length: bool,
+}
+
+/// A validated building: the graph, its geometry and its survey data.
+#[derive(Debug, Clone)]
+pub struct Building {
+    pub name: String,
+    pub floors: Vec<Floor>,
+    pub vertices: Vec<Vertex>,
+    pub edges: Vec<Edge>,
+    /// Node weight: vertex index; edge weight: edge index into `edges`.
+    pub graph: UnGraph<usize, usize>,
+    pub pilot: Vec<Fingerprint>,
+    pub test_points: Vec<Fingerprint>,
+    pub dense_survey: Vec<Fingerprint>,
+    pub kernel: Option<Kernel>,
+    index: HashMap<String, usize>,
+    /// `adjacency[v]`: (neighbour, edge index), sorted by neighbour.
+    adjacency: Vec<Vec<(usize, usize)>>,
+}
+
+impl Building {
+    /// Reads, parses and validates a building file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let origin = path.display().to_string();
+        let file = BuildingFile::read(path)?;
+        Self::from_file(file, &origin)
+    }
+
+    /// Parses and validates JSON text; `origin` names the source in errors.
+    pub fn from_json(text: &str, origin: &str) -> Result<Self> {
+        Self::from_file(BuildingFile::parse(text, origin)?, origin)
+    }
+
+    /// Validates a parsed file against every rule of SPEC sections 1 and 7.
+    pub fn from_file(file: BuildingFile, origin: &str) -> Result<Self> {
+        let bad = |path: String, msg: String| Error::invalid(origin, path, msg);
+        if file.format != FORMAT {
+            return Err(bad(
+                "format".into(),
+                format!(
+                    "unknown format version {:?}, expected {FORMAT:?}",
+                    file.format
+                ),
+            ));
+        }
+        if file.name.trim().is_empty() {
+            return Err(bad("name".into(), "must not be empty".into()));
+        }
+        let floors: Vec<Floor> = match &file.floors {
+            None => vec![Floor { id: 0, name: None }],
+            Some(list) => {
+                if list.is_empty() {
+                    return Err(bad("floors".into(), "must list at least one floor".into()));
+                }
+                let mut seen = HashMap::new();
+                for (i, f) in list.iter().enumerate() {
+                    if let Some(j) = seen.insert(f.id, i) {
+                        return Err(bad(
+                            format!("floors[{i}].id"),
+                            format!("duplicate floor id {} (also floors[{j}])", f.id),
+                        ));
+                    }
+                }
+                list.iter()
+                    .map(|f| Floor {
+                        id: f.id,
+                        name: f.name.clone(),
+                    })
+                    .collect()
+            }
+        };
+        let floor_ok = |f: i64| floors.iter().any(|fl| fl.id == f);
+
+        if file.vertices.is_empty() {
+            return Err(bad(
+                "vertices".into(),
+                "must list at least one vertex".into(),
+            ));
+        }
+        let mut index: HashMap<String, usize> = HashMap::new();
+        let mut positions: HashMap<(i64, u64, u64), usize> = HashMap::new();
+        let mut vertices = Vec::with_capacity(file.vertices.len());
+        for (i, v) in file.vertices.iter().enumerate() {
+            if v.id.is_empty() {
+                return Err(bad(format!("vertices[{i}].id"), "must not be empty".into()));
+            }
+            if let Some(&j) = index.get(&v.id) {
+                return Err(bad(
+                    format!("vertices[{i}].id"),
+                    format!("duplicate vertex id {:?} (first at vertices[{j}])", v.id),
+                ));
+            }
+            for (name, val) in [("x", v.x), ("y", v.y)] {
+                if !val.is_finite() {
+                    return Err(bad(
+                        format!("vertices[{i}].{name}"),
+                        format!("vertex {:?}: {name} must be finite, got {val}", v.id),
+                    ));
+                }
+            }
+            if !floor_ok(v.floor) {
+                return Err(bad(
+                    format!("vertices[{i}].floor"),
+                    format!(
+                        "vertex {:?} is on floor {}, which is not in `floors`",
+                        v.id, v.floor
+                    ),
+                ));
+            }
+            // +0.0 folds -0.0 into 0.0 so that both spell one position.
+            let key = (v.floor, (v.x + 0.0).to_bits(), (v.y + 0.0).to_bits());
+            if let Some(&j) = positions.get(&key) {
+                return Err(bad(
+                    format!("vertices[{i}]"),
+                    format!(
+                        "duplicate position: vertex {:?} and vertex {:?} are both at ({}, {}) on floor {}",
+                        v.id, file.vertices[j].id, v.x, v.y, v.floor
+                    ),
+                ));
+            }
+            positions.insert(key, i);
+            index.insert(v.id.clone(), i);
+            vertices.push(Vertex {
+                id: v.id.clone(),
+                pos: Point::new(v.x, v.y, v.floor),
+                label: v.label.clone(),
+            });
+        }
+
+        let mut graph: UnGraph<usize, usize> =
+            UnGraph::with_capacity(vertices.len(), file.edges.len());
+        for i in 0..vertices.len() {
+            graph.add_node(i);
+        }
+        let mut pairs: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut edges = Vec::with_capacity(file.edges.len());
+        let mut adjacency = vec![Vec::new(); vertices.len()];
+        for (i, e) in file.edges.iter().enumerate() {
+            let a = *index
+                .get(&e.a)
+                .ok_or_else(|| bad(format!("edges[{i}].a"), format!("unknown vertex {:?}", e.a)))?;
+            let b = *index
+                .get(&e.b)
+                .ok_or_else(|| bad(format!("edges[{i}].b"), format!("unknown vertex {:?}", e.b)))?;
+            if a == b {
+                return Err(bad(
+                    format!("edges[{i}]"),
+                    format!("self-loop at vertex {:?}", e.a),
+                ));
+            }
+            let key = (a.min(b), a.max(b));
+            if let Some(j) = pairs.insert(key, i) {
+                return Err(bad(
+                    format!("edges[{i}]"),
+                    format!(
+                        "vertices {:?} and {:?} are already joined by edges[{j}]",
+                        e.a, e.b
+                    ),
+                ));
+            }
+            let (pa, pb) = (vertices[a].pos, vertices[b].pos);
+            let euclid = pa.planar_distance(&pb);
+            let length = match e.length {
+                Some(l) => {
+                    if !l.is_finite() || l < 0.0 {
+                        return Err(bad(
+                            format!("edges[{i}].length"),
+                            format!(
+                                "edge {:?}-{:?}: length must be a finite non-negative number, got {l}",
+                                e.a, e.b
+                            ),
+                        ));
+                    }
+                    if l < MIN_EDGE_LENGTH {
+                        return Err(bad(
+                            format!("edges[{i}].length"),
+                            format!(
+                                "edge {:?}-{:?}: length {l} m is shorter than {MIN_EDGE_LENGTH} m",
+                                e.a, e.b
+                            ),
+                        ));
+                    }
+                    if pa.floor == pb.floor && l < euclid * (1.0 - 1e-9) - 1e-9 {
+                        return Err(bad(
+                            format!("edges[{i}].length"),
+                            format!(
+                                "edge {:?}-{:?}: length {l} m is shorter than the straight-line distance {euclid:.6} m",
+                                e.a, e.b
+                            ),
+                        ));
+                    }
+                    l
+                }
+                None => {
+                    if pa.floor != pb.floor {
+                        return Err(bad(
+                            format!("edges[{i}].length"),
+                            format!(
+                                "edge {:?}-{:?} joins floors {} and {} and needs an explicit length",
+                                e.a, e.b, pa.floor, pb.floor
+                            ),
+                        ));
+                    }
+                    if euclid < MIN_EDGE_LENGTH {
+                        return Err(bad(
+                            format!("edges[{i}]"),
+                            format!(
+                                "edge {:?}-{:?} is shorter than {MIN_EDGE_LENGTH} m",
+                                e.a, e.b
+                            ),
+                        ));
+                    }
+                    euclid
+                }
+            };
+            graph.add_edge(NodeIndex::new(a), NodeIndex::new(b), edges.len());
+            adjacency[a].push((b, edges.len()));
+            adjacency[b].push((a, edges.len()));
+            edges.push(Edge {
+                a,
+                b,
+                length,
+                explicit_length: e.length.is_some(),
+            });
+        }
+        for adj in &mut adjacency {
+            adj.sort_unstable();
+        }
+
+        // Connectivity: name every component's size and one vertex of it.
+        let comps = components(&adjacency);
+        if comps.len() > 1 {
+            let mut desc: Vec<String> = comps
+                .iter()
+                .map(|c| format!("{} vertices including {:?}", c.len(), vertices[c[0]].id))
+                .collect();
+            desc.truncate(10);
+            return Err(bad(
+                "edges".into(),
+                format!(
+                    "the graph is disconnected: {} components ({})",
+                    comps.len(),
+                    desc.join("; ")
+                ),
+            ));
+        }
+
+        for (field, list) in [
+            ("pilot", &file.pilot),
+            ("test_points", &file.test_points),
+            ("dense_survey", &file.dense_survey),
+        ] {
+            for (i, fp) in list.iter().enumerate() {
+                for (name, val) in [("x", fp.x), ("y", fp.y)] {
+                    if !val.is_finite() {
+                        return Err(bad(
+                            format!("{field}[{i}].{name}"),
+                            format!("must be finite, got {val}"),
+                        ));
+                    }
+                }
+                if !floor_ok(fp.floor) {
+                    return Err(bad(
+                        format!("{field}[{i}].floor"),
+                        format!("floor {} is not in `floors`", fp.floor),
+                    ));
+                }
+                for (ap, &rss) in &fp.rss {
+                    if !rss.is_finite() || !(-150.0..=30.0).contains(&rss) {
+                        return Err(bad(
+                            format!("{field}[{i}].rss.{ap}"),
+                            format!("RSS must be a finite dBm value in [-150, 30], got {rss}"),
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(k) = &file.kernel {
+            for (name, val) in [("sf2", k.sf2), ("ell", k.ell), ("sn2", k.sn2)] {
+                if !val.is_finite() || val <= 0.0 {
+                    return Err(bad(
+                        format!("kernel.{name}"),
+                        format!("must be a finite positive number, got {val}"),
+                    ));
+                }
+            }
+        }
+
+        Ok(Building {
+            name: file.name,
+            floors,
+            vertices,
+            edges,
+            graph,
+            pilot: file.pilot,
+            test_points: file.test_points,
+            dense_survey: file.dense_survey,
+            kernel: file.kernel,
+            index,
+            adjacency,
+        })
+    }
+
+    /// Back to the exchange format (lengths written only where the file gave them).
+    pub fn to_file(&self) -> BuildingFile {
+        let single_default =
+            self.floors.len() == 1 && self.floors[0].id == 0 && self.floors[0].name.is_none();
+        BuildingFile {
+            format: FORMAT.into(),
+            name: self.name.clone(),
+            floors: if single_default {
+                None
+            } else {
+                Some(
+                    self.floors
+                        .iter()
+                        .map(|f| FloorSpec {
+                            id: f.id,
+                            name: f.name.clone(),
+                        })
+                        .collect(),
+                )
+            },
+            vertices: self
+                .vertices
+                .iter()
+                .map(|v| VertexSpec {
+                    id: v.id.clone(),
+                    x: v.pos.x,
+                    y: v.pos.y,
+                    floor: v.pos.floor,
+                    label: v.label.clone(),
+                })
+                .collect(),
+            edges: self
+                .edges
+                .iter()
+                .map(|e| EdgeSpec {
+                    a: self.vertices[e.a].id.clone(),
+                    b: self.vertices[e.b].id.clone(),
+                    length: e.explicit_length.then_some(e.length),
+                })
+                .collect(),
+            pilot: self.pilot.clone(),
+            test_points: self.test_points.clone(),
+            dense_survey: self.dense_survey.clone(),
+            kernel: self.kernel,
+        }
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Always false: a validated building has at least one vertex.
+    pub fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
+    }
+
+    /// Index of the vertex with this id.
+    pub fn vertex_index(&self, id: &str) -> Option<usize> {
+        self.index.get(id).copied()
+    }
+
+    /// Index of the vertex with this id, or an error naming it.
+    pub fn require_vertex(&self, id: &str) -> Result<usize> {
+        self.vertex_index(id).ok_or_else(|| {
+            Error::InvalidRequest(format!("unknown vertex {id:?} in building {:?}", self.name))
+        })
+    }
+
+    /// Neighbours of `v` with the joining edge index, sorted by neighbour index.
+    pub fn neighbours(&self, v: usize) -> &[(usize, usize)] {
+        &self.adjacency[v]
+    }
+
+    /// The edge joining `a` and `b`, if any.
+    pub fn edge_between(&self, a: usize, b: usize) -> Option<&Edge> {
+        let adj = &self.adjacency[a];
+        adj.binary_search_by_key(&b, |&(n, _)| n)
+            .ok()
+            .map(|i| &self.edges[adj[i].1])
+    }
+
+    /// Positions of all vertices, in index order (the set `V` of the utility).
+    pub fn vertex_points(&self) -> Vec<Point> {
+        self.vertices.iter().map(|v| v.pos).collect()
+    }
+
+    /// Positions of the pilot locations (the set `D`).
+    pub fn pilot_points(&self) -> Vec<Point> {
+        self.pilot.iter().map(Fingerprint::point).collect()
+    }
+
+    /// Total length of all edges, metres.
+    pub fn total_edge_length(&self) -> f64 {
+        self.edges.iter().map(|e| e.length).sum()
+    }
+
+    /// Resolves a walk given by vertex ids, checking that consecutive vertices share an
+    /// edge. Errors name the step (0-based) and the ids.
+    pub fn resolve_walk<S: AsRef<str>>(&self, ids: &[S]) -> Result<Vec<usize>> {
+        if ids.is_empty() {
+            return Err(Error::InvalidWalk {
+                step: 0,
+                message: "the walk is empty".into(),
+            });
+        }
+        let mut walk = Vec::with_capacity(ids.len());
+        for (step, id) in ids.iter().enumerate() {
+            let id = id.as_ref().trim();
+            let v = self.vertex_index(id).ok_or_else(|| Error::InvalidWalk {
+                step,
+                message: format!("unknown vertex {id:?}"),
+            })?;
+            if let Some(&prev) = walk.last() {
+                if self.edge_between(prev, v).is_none() {
+                    return Err(Error::InvalidWalk {
+                        step,
+                        message: format!(
+                            "no edge between {:?} and {:?}",
+                            self.vertices[prev].id, id
+                        ),
+                    });
+                }
+            }
+            walk.push(v);
+        }
+        Ok(walk)
+    }
+
+    /// Checks a walk of indices (consecutive vertices joined by edges).
+    pub fn check_walk(&self, walk: &[usize]) -> Result<()> {
+        for (step, w) in walk.windows(2).enumerate() {
+            if w[0] >= self.len() || w[1] >= self.len() || self.edge_between(w[0], w[1]).is_none() {
+                return Err(Error::InvalidWalk {
+                    step: step + 1,
+                    message: format!("no edge between vertex #{} and vertex #{}", w[0], w[1]),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Length `C(P)` of a walk of indices; the walk must be valid.
+    pub fn walk_length(&self, walk: &[usize]) -> f64 {
+        walk.windows(2)
+            .map(|w| {
+                self.edge_between(w[0], w[1])
+                    .map_or(f64::INFINITY, |e| e.length)
+            })
+            .sum()
+    }
+
+    /// Vertex ids of a walk of indices.
+    pub fn walk_ids(&self, walk: &[usize]) -> Vec<String> {
+        walk.iter().map(|&v| self.vertices[v].id.clone()).collect()
+    }
+}
+
+/// Connected components as lists of vertex indices, each list sorted, largest first.
+fn components(adjacency: &[Vec<(usize, usize)>]) -> Vec<Vec<usize>> {
+    let n = adjacency.len();
+    let mut comp = vec![usize::MAX; n];
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for s in 0..n {
+        if comp[s] != usize::MAX {
+            continue;
+        }
+        let c = out.len();
+        let mut stack = vec![s];
+        comp[s] = c;
+        let mut members = Vec::new();
+        while let Some(v) = stack.pop() {
+            members.push(v);
+            for &(w, _) in &adjacency[v] {
+                if comp[w] == usize::MAX {
+                    comp[w] = c;
+                    stack.push(w);
+                }
+            }
+        }
+        members.sort_unstable();
+        out.push(members);
+    }
+    out.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
+    out
+}
+
+#[cfg(test)]
+#[path = "building_tests.rs"]
+mod tests;

@@ -1,0 +1,242 @@
+//! Validation tests: every rule of SPEC sections 1 and 7, each with its message checked.
+
+use super::*;
+
+fn base() -> serde_json::Value {
+    serde_json::json!({
+        "format": "survey-building/1",
+        "name": "T",
+        "vertices": [
+            {"id": "a", "x": 0.0, "y": 0.0},
+            {"id": "b", "x": 3.0, "y": 4.0},
+            {"id": "c", "x": 3.0, "y": 0.0, "label": "Lobby"}
+        ],
+        "edges": [{"a": "a", "b": "b"}, {"a": "b", "b": "c", "length": 4.5}]
+    })
+}
+
+fn err_of(v: serde_json::Value) -> String {
+    match Building::from_json(&v.to_string(), "t.json") {
+        Ok(_) => panic!("expected an error for {v}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn valid_building_loads_with_lengths_and_adjacency() {
+    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    assert_eq!(b.len(), 3);
+    assert!((b.edges[0].length - 5.0).abs() < 1e-12, "Euclidean default");
+    assert_eq!(b.edges[1].length, 4.5);
+    assert_eq!(b.vertex_index("c"), Some(2));
+    assert!(b.edge_between(0, 1).is_some() && b.edge_between(0, 2).is_none());
+    assert_eq!(b.walk_length(&[0, 1, 2, 1]), 5.0 + 4.5 + 4.5);
+    assert_eq!(b.graph.node_count(), 3);
+    assert_eq!(b.graph.edge_count(), 2);
+}
+
+#[test]
+fn export_then_import_gives_the_same_building() {
+    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    let text = b.to_file().to_json();
+    let b2 = Building::from_json(&text, "again").expect("valid");
+    assert_eq!(b.to_file(), b2.to_file());
+}
+
+#[test]
+fn unknown_format_version() {
+    let mut v = base();
+    v["format"] = "survey-building/2".into();
+    let e = err_of(v);
+    assert!(
+        e.contains("t.json: format: unknown format version \"survey-building/2\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn unknown_vertex_in_edge() {
+    let mut v = base();
+    v["edges"][1]["b"] = "zz".into();
+    let e = err_of(v);
+    assert!(e.contains("edges[1].b: unknown vertex \"zz\""), "{e}");
+}
+
+#[test]
+fn duplicate_vertex_id() {
+    let mut v = base();
+    v["vertices"][2]["id"] = "a".into();
+    let e = err_of(v);
+    assert!(
+        e.contains("vertices[2].id: duplicate vertex id \"a\" (first at vertices[0])"),
+        "{e}"
+    );
+}
+
+#[test]
+fn duplicate_position_on_a_floor() {
+    let mut v = base();
+    v["vertices"][2]["x"] = 0.0.into();
+    let e = err_of(v);
+    assert!(
+        e.contains(
+            "duplicate position: vertex \"c\" and vertex \"a\" are both at (0, 0) on floor 0"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn same_position_on_two_floors_is_fine_but_needs_explicit_length() {
+    let mut v = base();
+    v["floors"] = serde_json::json!([{"id": 0}, {"id": 1}]);
+    v["vertices"][2] = serde_json::json!({"id": "c", "x": 0.0, "y": 0.0, "floor": 1});
+    v["edges"][1] = serde_json::json!({"a": "a", "b": "c"});
+    let e = err_of(v.clone());
+    assert!(
+        e.contains(
+            "edges[1].length: edge \"a\"-\"c\" joins floors 0 and 1 and needs an explicit length"
+        ),
+        "{e}"
+    );
+    v["edges"][1]["length"] = 6.0.into();
+    let b = Building::from_json(&v.to_string(), "t.json").expect("valid with length");
+    assert_eq!(b.edges[1].length, 6.0);
+}
+
+#[test]
+fn vertex_on_unknown_floor() {
+    let mut v = base();
+    v["vertices"][1]["floor"] = 3.into();
+    let e = err_of(v);
+    assert!(
+        e.contains("vertices[1].floor: vertex \"b\" is on floor 3, which is not in `floors`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn negative_and_tiny_lengths() {
+    let mut v = base();
+    v["edges"][1]["length"] = (-1.0).into();
+    let e = err_of(v);
+    assert!(
+        e.contains(
+            "edges[1].length: edge \"b\"-\"c\": length must be a finite non-negative number, got -1"
+        ),
+        "{e}"
+    );
+    let mut v = base();
+    v["edges"][1]["length"] = 1e-7.into();
+    let e = err_of(v);
+    assert!(e.contains("is shorter than 0.000001 m"), "{e}");
+}
+
+#[test]
+fn length_shorter_than_straight_line() {
+    let mut v = base();
+    v["edges"][1]["length"] = 3.9.into();
+    let e = err_of(v);
+    assert!(e.contains("edges[1].length: edge \"b\"-\"c\": length 3.9 m is shorter than the straight-line distance 4.000000 m"), "{e}");
+}
+
+#[test]
+fn self_loop() {
+    let mut v = base();
+    v["edges"][0]["b"] = "a".into();
+    let e = err_of(v);
+    assert!(e.contains("edges[0]: self-loop at vertex \"a\""), "{e}");
+}
+
+#[test]
+fn same_pair_twice() {
+    let mut v = base();
+    v["edges"]
+        .as_array_mut()
+        .expect("array")
+        .push(serde_json::json!({"a": "b", "b": "a"}));
+    let e = err_of(v);
+    assert!(
+        e.contains("edges[2]: vertices \"b\" and \"a\" are already joined by edges[0]"),
+        "{e}"
+    );
+}
+
+#[test]
+fn disconnected_graph_names_components() {
+    let mut v = base();
+    v["vertices"]
+        .as_array_mut()
+        .expect("array")
+        .push(serde_json::json!({"id": "d", "x": 9.0, "y": 9.0}));
+    let e = err_of(v);
+    assert!(e.contains("the graph is disconnected: 2 components (3 vertices including \"a\"; 1 vertices including \"d\")"), "{e}");
+}
+
+#[test]
+fn non_finite_numbers_are_rejected() {
+    // JSON has no NaN literal; an overflowing literal is how a non-finite number arrives.
+    let text = base().to_string().replace("\"x\":3.0", "\"x\":1e999");
+    let e = Building::from_json(&text, "t.json").expect_err("overflow");
+    assert!(e.to_string().contains("t.json: vertices[1].x"), "{e}");
+    let mut v = base();
+    v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": 5.0e3}}]);
+    let e = err_of(v);
+    assert!(
+        e.contains("pilot[0].rss.ap: RSS must be a finite dBm value in [-150, 30], got 5000"),
+        "{e}"
+    );
+    let mut v = base();
+    v["kernel"] = serde_json::json!({"sf2": 1.0, "ell": -2.0, "sn2": 1.0});
+    let e = err_of(v);
+    assert!(
+        e.contains("kernel.ell: must be a finite positive number, got -2"),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_types_name_the_json_path() {
+    let mut v = base();
+    v["vertices"][1]["x"] = "three".into();
+    let e = Building::from_json(&v.to_string(), "t.json").expect_err("type");
+    let s = e.to_string();
+    assert!(
+        s.starts_with("t.json: vertices[1].x: invalid type: string \"three\""),
+        "{s}"
+    );
+    let e = Building::from_json("{not json", "t.json")
+        .expect_err("syntax")
+        .to_string();
+    assert!(e.starts_with("t.json: "), "{e}");
+}
+
+#[test]
+fn walks_are_resolved_and_checked() {
+    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    assert_eq!(
+        b.resolve_walk(&["a", "b", "c"]).expect("walk"),
+        vec![0, 1, 2]
+    );
+    let e = b
+        .resolve_walk(&["a", "c"])
+        .expect_err("no edge")
+        .to_string();
+    assert_eq!(e, "invalid walk at step 1: no edge between \"a\" and \"c\"");
+    let e = b
+        .resolve_walk(&["a", "q"])
+        .expect_err("unknown")
+        .to_string();
+    assert_eq!(e, "invalid walk at step 1: unknown vertex \"q\"");
+}
+
+#[test]
+fn shared_instances_load() {
+    for name in ["area-one.json", "area-two.json"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../shared/instances")
+            .join(name);
+        let b = Building::load(&path).expect("shared instance is valid");
+        assert!(b.len() > 20 && !b.pilot.is_empty());
+    }
+}

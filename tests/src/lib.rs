@@ -1,0 +1,1 @@
+//! Marker crate for the end-to-end tests in `tests/tests/`.
