@@ -1,5 +1,7 @@
 //! Gaussian-process pieces: the kernel, the hyperparameter fit and posterior prediction.
 
+pub mod fit;
 pub mod kernel;
 
+pub use fit::{FitResult, fit_kernel};
 pub use kernel::{Kernel, Point};
