@@ -7,3 +7,7 @@
 pub mod reference;
 
 pub use reference::{Observation, reference_utility};
+pub mod engine;
+pub mod simd;
+
+pub use engine::{Mark, UtilityEngine, WalkState};
