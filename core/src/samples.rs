@@ -287,10 +287,9 @@ impl WalkSampler {
             if let SurveyorModel::Human {
                 turn_threshold_deg, ..
             } = self.model
+                && is_turn_checkin(building, prev, at, next, turn_threshold_deg)
             {
-                if is_turn_checkin(building, prev, at, next, turn_threshold_deg) {
-                    self.last_checkin = self.length;
-                }
+                self.last_checkin = self.length;
             }
         }
         // The pending sample at `at` is now final, with the check-in status known.
@@ -307,9 +306,8 @@ impl WalkSampler {
                 break;
             }
             let frac = ((s - start_arc) / len).clamp(0.0, 1.0);
-            let floor = if pa.floor == pb.floor {
-                pa.floor
-            } else if frac < 0.5 {
+            // On a stair the floor of the nearer end, the lower one exactly at the middle.
+            let floor = if pa.floor == pb.floor || frac < 0.5 {
                 pa.floor
             } else if frac > 0.5 {
                 pb.floor

@@ -89,7 +89,7 @@ fn push_rows<const FMA: bool>(f: &mut Factor, ctx: &Ctx, p: &Point, noise: f64) 
         row[j] = s * f.inv_diag[j];
     }
     let d2 = ctx.sf2 + ctx.sn2 + noise - simd::dot::<FMA>(&row[..n], &row[..n]);
-    if !(d2 > 0.0) || !d2.is_finite() {
+    if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
         f.l.truncate(off);
         return false;
     }
@@ -134,7 +134,7 @@ fn chol_logdet<const FMA: bool>(a: &mut [f64], n: usize) -> Option<f64> {
             row[j] = s / rj[j];
         }
         let d2 = row[i] - simd::dot::<FMA>(&row[..i], &row[..i]);
-        if !(d2 > 0.0) || !d2.is_finite() {
+        if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
             return None;
         }
         let d = d2.sqrt();

@@ -86,8 +86,8 @@ pub fn axpy<const FMA: bool>(alpha: f64, x: &[f64], y: &mut [f64]) {
 }
 
 const LOG2E: f64 = std::f64::consts::LOG2_E;
-const LN2_HI: f64 = 6.931_471_803_691_238_164_90e-1;
-const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
 /// 1.5 * 2^52: adding and subtracting it rounds a double of modest size to an integer.
 const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
 /// 2^52: `(j + 2^52).to_bits()` holds the integer `j` in its low mantissa bits.
