@@ -125,7 +125,7 @@ fn rank1_upper<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
 /// the factor so far, the Schur complement of the new block and its Cholesky, then the
 /// new rows of `L` and `W`, and the downdate of `Sigma`.
 #[inline(always)]
-fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> bool {
+fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], keep_rows: bool) -> bool {
     let n0 = f.pts.len();
     let m = obs.len();
     let nv = ctx.nv;
@@ -188,6 +188,10 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -
     }
     blocked::solve_upper_transposed::<FMA>(&s, m, &mut wn, nv);
     blocked::syrk_upper_sub::<FMA>(&mut f.sigma, nv, &wn, m);
+    if !keep_rows {
+        // Only Sigma is wanted (a whole walk evaluated once): skip the strided gather.
+        return true;
+    }
     // Append the rows of L: [X^T row i, U column i].
     f.l.reserve(m * n0 + m * (m + 1) / 2);
     for i in 0..m {
@@ -207,9 +211,9 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -
 
 /// Adds observations to a factor, downdating its `Sigma`.
 #[inline(always)]
-fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> bool {
+fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], keep_rows: bool) -> bool {
     if obs.len() >= blocked::BLOCK {
-        return add_batch::<FMA>(f, ctx, obs);
+        return add_batch::<FMA>(f, ctx, obs, keep_rows);
     }
     for (p, noise) in obs {
         if !push_rows::<FMA>(f, ctx, p, *noise) {
@@ -247,7 +251,9 @@ fn logdet_sigma<const FMA: bool>(
 
 /// Arguments of the dispatched operations (one signature keeps the macro simple).
 enum DispatchArg<'a> {
-    Add(&'a [(Point, f64)]),
+    /// Observations to add, and whether the factor's rows must be kept (false: only
+    /// `Sigma` is updated, the factor must not be extended afterwards).
+    Add(&'a [(Point, f64)], bool),
     LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
 }
 
@@ -259,7 +265,7 @@ enum DispatchOut {
 #[inline(always)]
 fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
     match a {
-        DispatchArg::Add(obs) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs)),
+        DispatchArg::Add(obs, keep) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs, keep)),
         DispatchArg::LogDet(extra, scratch) => {
             DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
         }
@@ -389,7 +395,11 @@ impl UtilityEngine {
     }
 
     fn add(&self, f: &mut Factor, obs: &[(Point, f64)]) -> Result<()> {
-        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs)) {
+        self.add_rows(f, obs, true)
+    }
+
+    fn add_rows(&self, f: &mut Factor, obs: &[(Point, f64)], keep_rows: bool) -> Result<()> {
+        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs, keep_rows)) {
             DispatchOut::Added(true) => Ok(()),
             _ => Err(Error::Numerical(
                 "K_SS + N_S lost positive definiteness".into(),
@@ -465,7 +475,7 @@ impl UtilityEngine {
         let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
         let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
         let mut f = self.base.clone();
-        self.add(&mut f, &obs)?;
+        self.add_rows(&mut f, &obs, false)?;
         self.utility_of(&mut f, None, &mut Vec::new())
     }
 
