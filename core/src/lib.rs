@@ -16,7 +16,9 @@ pub mod error;
 pub mod eval;
 pub mod gp;
 pub mod render;
+pub mod samples;
 pub mod synth;
+pub mod utility;
 
 pub use building::Building;
 pub use error::{Error, Result};

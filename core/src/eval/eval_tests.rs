@@ -1,9 +1,8 @@
 //! Evaluation tests: the reference grid, the summary, and localization on the paper's
 //! areas and on generated buildings.
 
-#![allow(clippy::expect_used)] // tests state what they expect
-
 use super::*;
+use crate::samples::{SurveyorModel, sample_walk};
 use crate::synth::{DEMO_BUILDING_JSON, SynthParams, generate};
 
 fn fixture(name: &str) -> Building {
@@ -128,27 +127,68 @@ fn all_dense_positions_localize_well_on_area_one() {
     assert!(r.mean_error_m < 2.0, "mean error {} m", r.mean_error_m);
 }
 
+/// A walk that visits every vertex: a depth-first tour from vertex 0, walking back along
+/// the tree edges.
+fn dfs_tour(b: &Building) -> Vec<usize> {
+    fn visit(b: &Building, v: usize, seen: &mut [bool], walk: &mut Vec<usize>) {
+        seen[v] = true;
+        walk.push(v);
+        for &(w, _) in b.neighbours(v) {
+            if !seen[w] {
+                visit(b, w, seen, walk);
+                walk.push(v);
+            }
+        }
+    }
+    let mut seen = vec![false; b.len()];
+    let mut walk = Vec::new();
+    visit(b, 0, &mut seen, &mut walk);
+    walk
+}
+
 #[test]
 fn a_dense_walk_beats_the_pilot_data_alone_on_a_generated_building() {
     let b = Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo");
     let ev = Evaluator::new(&b, &DEMO, EvalOptions::default()).expect("evaluator");
-    // A walk along every corridor vertex and into every room's door and first row.
-    let walk_points = dense_points(&b);
+    let walk = dfs_tour(&b);
+    b.check_walk(&walk).expect("a walk");
+    let samples = sample_walk(&b, &walk, &SurveyorModel::robot(), &DEMO).expect("samples");
     let mut pilot_only = 0.0;
     let mut dense = 0.0;
     for seed in 0..3 {
         pilot_only += ev.evaluate(&[], seed).expect("pilot only").mean_error_m;
-        dense += ev.evaluate(&walk_points, seed).expect("dense").mean_error_m;
+        dense += ev
+            .evaluate_samples(&samples, seed)
+            .expect("dense")
+            .mean_error_m;
     }
     eprintln!(
-        "demo: pilot only {:.2} m, dense {:.2} m",
+        "demo: pilot only {:.2} m, {} samples along {:.0} m {:.2} m",
         pilot_only / 3.0,
+        samples.len(),
+        b.walk_length(&walk),
         dense / 3.0
     );
     assert!(
         pilot_only > dense + 0.3,
         "pilot only {pilot_only} vs dense {dense} (sums over 3 seeds)"
     );
+}
+
+#[test]
+fn human_label_noise_enters_the_map_and_is_deterministic() {
+    let b = Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo");
+    let ev = Evaluator::new(&b, &DEMO, EvalOptions::default()).expect("evaluator");
+    let walk = dfs_tour(&b);
+    let human = sample_walk(&b, &walk, &SurveyorModel::human(), &DEMO).expect("samples");
+    assert!(human.iter().any(|s| s.extra_noise > 0.0));
+    let a = ev.evaluate_samples(&human, 3).expect("a");
+    assert_eq!(a, ev.evaluate_samples(&human, 3).expect("again"));
+    // Without the label noise the same positions give another map.
+    let points: Vec<Point> = human.iter().map(|s| s.pos).collect();
+    let plain = ev.evaluate(&points, 3).expect("plain");
+    assert_eq!(plain.samples, a.samples);
+    assert_ne!(plain.errors_m, a.errors_m);
 }
 
 #[test]

@@ -18,8 +18,6 @@
 //! test fingerprints) so that an experiment loop pays for it once; [`evaluate`] is the
 //! one-shot form.
 
-mod robot;
-
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -27,11 +25,10 @@ use serde::Serialize;
 use crate::building::{Building, Fingerprint};
 use crate::gp::predict::GpModel;
 use crate::gp::{Kernel, Point};
+use crate::samples::Sample;
 use crate::synth::PropagationModel;
 use crate::synth::random::{normal, stream_rng};
 use crate::{Error, Result};
-
-pub use robot::robot_samples;
 
 /// RSS that stands for "not heard", dBm (SPEC section 2 and 5).
 pub const MISSING_DBM: f64 = -100.0;
@@ -332,10 +329,29 @@ impl Evaluator {
     }
 
     /// Localization error when the fingerprint map is built from samples at
-    /// `sample_points` (plus the pilot data). `seed` drives the noise of the drawn
-    /// fingerprints: test fingerprints and sample fingerprints use separate streams, so
-    /// the drawn test fingerprints do not depend on the samples.
+    /// `sample_points` (plus the pilot data), every observation with noise `sn2`. `seed`
+    /// drives the noise of the drawn fingerprints: test fingerprints and sample
+    /// fingerprints use separate streams, so the drawn test fingerprints do not depend on
+    /// the samples.
     pub fn evaluate(&self, sample_points: &[Point], seed: u64) -> Result<LocalizationReport> {
+        self.evaluate_inner(sample_points, None, seed)
+    }
+
+    /// As [`Evaluator::evaluate`] for the samples of [`crate::samples::sample_walk`]: a
+    /// human sample's label noise (SPEC section 4) is added to `sn2` in the map's GP, as
+    /// the planner assumes. The fingerprint itself is drawn at the sample's true position.
+    pub fn evaluate_samples(&self, samples: &[Sample], seed: u64) -> Result<LocalizationReport> {
+        let points: Vec<Point> = samples.iter().map(|s| s.pos).collect();
+        let extra: Vec<f64> = samples.iter().map(|s| s.extra_noise).collect();
+        self.evaluate_inner(&points, Some(&extra), seed)
+    }
+
+    fn evaluate_inner(
+        &self,
+        sample_points: &[Point],
+        extra_noise: Option<&[f64]>,
+        seed: u64,
+    ) -> Result<LocalizationReport> {
         let m = self.aps.len();
         let sd = self.kernel.sn2.sqrt();
 
@@ -372,7 +388,13 @@ impl Evaluator {
                 "nothing to build a fingerprint map from: no samples and no pilot data".into(),
             ));
         }
-        let gp = GpModel::fit(&self.kernel, &train, &values)?;
+        let mut noise = vec![self.kernel.sn2; train.len()];
+        if let Some(extra) = extra_noise {
+            for (n, x) in noise.iter_mut().zip(extra) {
+                *n += x;
+            }
+        }
+        let gp = GpModel::fit_with_noise(&self.kernel, &train, &noise, &values)?;
         let pred = gp.predict(&self.grid);
 
         // Localize every test fingerprint at the most likely grid point.

@@ -265,7 +265,6 @@ fn stack_rows(blocks: &[DMatrix<f64>], rows: usize, m: usize) -> DMatrix<f64> {
 }
 
 #[cfg(test)]
-#[allow(clippy::expect_used)] // tests state what they expect
 mod tests {
     use super::*;
 

@@ -4,7 +4,7 @@
 //! One SVG holds one panel per floor, stacked top to bottom in the building's floor order
 //! and drawn at the same scale over the same plan area, so that floors line up. The heat
 //! map is the latent posterior standard deviation (dB) of the GP conditioned on the pilot
-//! locations plus the walk's samples (only positions matter), on the reference grid of
+//! locations plus the walk's samples (only positions and noise matter), on the grid of
 //! [`crate::eval::reference_grid`], coloured from 0 to `sqrt(sf2)`.
 //!
 //! The SVG is plain string building: the drawing needs a dozen element kinds and no
@@ -20,6 +20,7 @@ use crate::building::Building;
 use crate::eval::reference_grid;
 use crate::gp::predict::GpModel;
 use crate::gp::{Kernel, Point};
+use crate::samples::Sample;
 use crate::{Error, Result};
 
 /// What to draw on top of the building.
@@ -27,8 +28,9 @@ use crate::{Error, Result};
 pub struct Scene {
     /// A walk as vertex indices (empty: no walk).
     pub walk: Vec<usize>,
-    /// Sample positions along the walk.
-    pub samples: Vec<Point>,
+    /// Samples along the walk ([`crate::samples::sample_walk`]); their label noise counts
+    /// in the heat map.
+    pub samples: Vec<Sample>,
     /// Kernel for the heat map (`None`: no heat map).
     pub kernel: Option<Kernel>,
 }
@@ -150,8 +152,13 @@ pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -
             kernel.validate("render kernel")?;
             let grid = reference_grid(building, options.grid_step_m, options.grid_margin_m);
             let mut train = building.pilot_points();
-            train.extend_from_slice(&scene.samples);
-            let gp = GpModel::fit(&kernel, &train, &DMatrix::zeros(train.len(), 0))?;
+            let mut noise = vec![kernel.sn2; train.len()];
+            for smp in &scene.samples {
+                train.push(smp.pos);
+                noise.push(kernel.sn2 + smp.extra_noise);
+            }
+            let gp =
+                GpModel::fit_with_noise(&kernel, &train, &noise, &DMatrix::zeros(train.len(), 0))?;
             let sd: Vec<f64> = gp.variance(&grid).iter().map(|v| v.sqrt()).collect();
             Some((grid, sd, kernel.sf2.sqrt()))
         }
@@ -317,7 +324,12 @@ pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -
                 }
             }
         }
-        for p in scene.samples.iter().filter(|p| p.floor == floor.id) {
+        for p in scene
+            .samples
+            .iter()
+            .map(|s| s.pos)
+            .filter(|p| p.floor == floor.id)
+        {
             let _ = writeln!(
                 s,
                 r#"<circle class="sample" cx="{:.1}" cy="{:.1}" r="1.8"/>"#,

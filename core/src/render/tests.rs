@@ -1,9 +1,7 @@
 //! Rendering tests: the SVG is well formed and holds what was asked for.
 
-#![allow(clippy::expect_used)] // tests state what they expect
-
 use super::*;
-use crate::eval::robot_samples;
+use crate::samples::{SurveyorModel, sample_walk};
 use crate::synth::DEMO_BUILDING_JSON;
 
 fn count(svg: &str, needle: &str) -> usize {
@@ -56,11 +54,12 @@ fn walk_samples_and_heat_map() {
     let b = demo();
     let ids = ["f0-c00", "f0-c01", "f0-c02", "f0-c03", "f0-c02"];
     let walk = b.resolve_walk(&ids).expect("walk");
-    let samples = robot_samples(&b, &walk, 0.5).expect("samples");
+    let kernel = Kernel::new(60.0, 8.0, 4.0);
+    let samples = sample_walk(&b, &walk, &SurveyorModel::robot(), &kernel).expect("samples");
     let scene = Scene {
         walk,
         samples: samples.clone(),
-        kernel: Some(Kernel::new(60.0, 8.0, 4.0)),
+        kernel: Some(kernel),
     };
     let options = RenderOptions {
         labels: true,

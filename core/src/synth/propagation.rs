@@ -290,7 +290,6 @@ fn segments_cross(p1: (f64, f64), p2: (f64, f64), q1: (f64, f64), q2: (f64, f64)
 }
 
 #[cfg(test)]
-#[allow(clippy::expect_used)] // tests state what they expect
 mod tests {
     use super::*;
 

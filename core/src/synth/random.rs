@@ -39,7 +39,6 @@ pub(crate) fn normal<R: Rng>(rng: &mut R) -> f64 {
 }
 
 #[cfg(test)]
-#[allow(clippy::expect_used)] // tests state what they expect
 mod tests {
     use super::*;
 

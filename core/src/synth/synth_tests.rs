@@ -1,7 +1,5 @@
 //! Generator tests: the shipped demo is reproducible, buildings are valid and sensible.
 
-#![allow(clippy::expect_used)] // tests state what they expect
-
 use super::*;
 use crate::building::Building;
 

@@ -2,30 +2,27 @@
 
 use std::path::PathBuf;
 
-use trailprint::eval::robot_samples;
+use clap::Args as ClapArgs;
 use trailprint::render::{RenderOptions, Scene, render_svg};
-use trailprint::{Building, Error, Result};
+use trailprint::samples::sample_walk;
+use trailprint::{Error, Result};
 
-use crate::cmd_evaluate::{choose_kernel, parse_walk};
+use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, split_walk};
 
-/// Draw a building as one SVG, one panel per floor. With a kernel (`--kernel` or the
-/// building's) the panels carry a heat map of the posterior standard deviation given the
-/// pilot points and the walk's samples.
-#[derive(clap::Args)]
+/// Draw a building as one SVG, one panel per floor, with a heat map of the posterior
+/// standard deviation given the pilot points and the walk's samples.
+#[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Building file (survey-building/1).
-    #[arg(long)]
-    building: PathBuf,
-    /// A walk to draw: comma-separated vertex ids.
+    #[command(flatten)]
+    building: BuildingOpts,
+    /// A walk to draw, as comma-separated vertex ids.
     #[arg(long)]
     walk: Option<String>,
-    /// Kernel hyperparameters `SF2,ELL,SN2` for the heat map (default: the building's).
-    #[arg(long)]
-    kernel: Option<String>,
-    /// Distance between robot scans along the walk, metres.
-    #[arg(long, default_value_t = 0.5)]
-    interval: f64,
-    /// Pixels per metre (default: fit about 1400 px).
+    #[command(flatten)]
+    model: ModelOpts,
+    #[command(flatten)]
+    kernel: KernelOpts,
+    /// Pixels per metre (default: about 1400 px wide).
     #[arg(long)]
     scale: Option<f64>,
     /// Write vertex ids.
@@ -39,37 +36,39 @@ pub struct Args {
     out: PathBuf,
 }
 
-pub fn run(args: Args) -> Result<()> {
-    let building = Building::load(&args.building)?;
-    let kernel = choose_kernel(args.kernel.as_deref(), &building)?;
-    let walk = match &args.walk {
-        Some(text) => parse_walk(text, &building)?,
+pub fn run(a: Args) -> Result<()> {
+    let b = a.building.load()?;
+    let model = a.model.model()?;
+    let walk = match &a.walk {
+        Some(w) => b.resolve_walk(&split_walk(w))?,
         None => Vec::new(),
     };
-    let samples = if walk.is_empty() {
-        Vec::new()
+    // The kernel is needed for the heat map and for the samples (a human's label noise).
+    let kernel = if a.no_heatmap && walk.is_empty() {
+        None
     } else {
-        robot_samples(&building, &walk, args.interval)?
+        Some(a.kernel.resolve(&b)?.0)
     };
-    if kernel.is_none() && !args.no_heatmap {
-        eprintln!("note: no kernel (pass --kernel or fit first): drawing without the heat map");
-    }
+    let samples = match &kernel {
+        Some(k) if !walk.is_empty() => sample_walk(&b, &walk, &model, k)?,
+        _ => Vec::new(),
+    };
     let scene = Scene {
         walk,
         samples,
-        kernel,
+        kernel: if a.no_heatmap { None } else { kernel },
     };
     let options = RenderOptions {
-        scale_px_per_m: args.scale,
-        labels: args.labels,
-        heatmap: !args.no_heatmap,
+        scale_px_per_m: a.scale,
+        labels: a.labels,
+        heatmap: !a.no_heatmap,
         ..RenderOptions::default()
     };
-    let svg = render_svg(&building, &scene, &options)?;
-    if args.out.as_os_str() == "-" {
+    let svg = render_svg(&b, &scene, &options)?;
+    if a.out.as_os_str() == "-" {
         print!("{svg}");
     } else {
-        std::fs::write(&args.out, svg).map_err(|e| Error::io(&args.out, e))?;
+        std::fs::write(&a.out, svg).map_err(|e| Error::io(&a.out, e))?;
     }
     Ok(())
 }
