@@ -5,7 +5,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod cmd_evaluate;
 mod cmd_fit;
+mod cmd_generate;
+mod cmd_render;
 mod cmd_utility;
 mod opts;
 
@@ -26,6 +29,12 @@ enum Command {
     Fit(cmd_fit::Args),
     /// Evaluate the utility (mutual information, nats) of one or more walks.
     Utility(cmd_utility::Args),
+    /// Generate a synthetic building (graph, access points, pilot, test and dense survey).
+    Generate(cmd_generate::Args),
+    /// Localization error of a walk's fingerprint map (SPEC section 5).
+    Evaluate(cmd_evaluate::Args),
+    /// Draw a building, a walk and the posterior uncertainty as SVG.
+    Render(cmd_render::Args),
 }
 
 fn main() {
@@ -33,6 +42,9 @@ fn main() {
     let result = match cli.command {
         Command::Fit(a) => cmd_fit::run(a),
         Command::Utility(a) => cmd_utility::run(a),
+        Command::Generate(a) => cmd_generate::run(a),
+        Command::Evaluate(a) => cmd_evaluate::run(a),
+        Command::Render(a) => cmd_render::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
