@@ -14,7 +14,8 @@ use trailprint::utility::reference::{Observation, pilot_observations};
 use trailprint::utility::{UtilityEngine, reference_utility};
 
 fn area_two() -> Arc<Building> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/instances/area-two.json");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/area-two.json");
     Arc::new(Building::load(&path).expect("area-two"))
 }
 
@@ -27,10 +28,14 @@ fn lattice(rows: usize, cols: usize, pilot: usize) -> Arc<Building> {
         for c in 0..cols {
             vertices.push(serde_json::json!({"id": format!("r{r}c{c}"), "x": c as f64 * 1.5, "y": r as f64 * 1.5}));
             if c + 1 < cols {
-                edges.push(serde_json::json!({"a": format!("r{r}c{c}"), "b": format!("r{r}c{}", c + 1)}));
+                edges.push(
+                    serde_json::json!({"a": format!("r{r}c{c}"), "b": format!("r{r}c{}", c + 1)}),
+                );
             }
             if r + 1 < rows {
-                edges.push(serde_json::json!({"a": format!("r{r}c{c}"), "b": format!("r{}c{c}", r + 1)}));
+                edges.push(
+                    serde_json::json!({"a": format!("r{r}c{c}"), "b": format!("r{}c{c}", r + 1)}),
+                );
             }
         }
     }
@@ -83,14 +88,19 @@ fn bench_building(c: &mut Criterion, name: &str, b: Arc<Building>, kernel: Kerne
     let engine = UtilityEngine::new(b.clone(), kernel, model).expect("engine");
     eprintln!("{name}: engine ISA {:?}", engine.isa());
     let mut obs = pilot_observations(&b.pilot_points());
-    obs.extend(samples.iter().map(|s| Observation { pos: s.pos, extra_noise: s.extra_noise }));
+    obs.extend(samples.iter().map(|s| Observation {
+        pos: s.pos,
+        extra_noise: s.extra_noise,
+    }));
     let vpts = b.vertex_points();
     let mut g = c.benchmark_group(name);
     g.sample_size(20);
     g.bench_function("reference_whole_walk", |bn| {
         bn.iter(|| reference_utility(black_box(&kernel), &vpts, &obs).expect("u"))
     });
-    g.bench_function("engine_whole_walk", |bn| bn.iter(|| engine.utility(black_box(&walk)).expect("u")));
+    g.bench_function("engine_whole_walk", |bn| {
+        bn.iter(|| engine.utility(black_box(&walk)).expect("u"))
+    });
     // Extending a walk of (budget - one edge) by its last edge, then evaluating.
     let mut st = engine.start(walk[0]).expect("start");
     for &v in &walk[1..walk.len() - 1] {
@@ -106,13 +116,27 @@ fn bench_building(c: &mut Criterion, name: &str, b: Arc<Building>, kernel: Kerne
         })
     });
     let walks: Vec<Vec<usize>> = (0..64).map(|_| walk.clone()).collect();
-    g.bench_function("engine_64_walks_parallel", |bn| bn.iter(|| engine.utilities(black_box(&walks))));
+    g.bench_function("engine_64_walks_parallel", |bn| {
+        bn.iter(|| engine.utilities(black_box(&walks)))
+    });
     g.finish();
 }
 
 fn benches(c: &mut Criterion) {
-    bench_building(c, "area-two-140m", area_two(), Kernel::new(103.22, 32.17, 3.3), 140.0);
-    bench_building(c, "lattice-550-140m", lattice(25, 22, 30), Kernel::new(103.22, 32.17, 3.3), 140.0);
+    bench_building(
+        c,
+        "area-two-140m",
+        area_two(),
+        Kernel::new(103.22, 32.17, 3.3),
+        140.0,
+    );
+    bench_building(
+        c,
+        "lattice-550-140m",
+        lattice(25, 22, 30),
+        Kernel::new(103.22, 32.17, 3.3),
+        140.0,
+    );
 }
 
 criterion_group!(utility, benches);

@@ -121,7 +121,11 @@ pub fn solve_upper_transposed<const FMA: bool>(u: &[f64], m: usize, b: &mut [f64
                 coeffs[t] = u[k * m + i];
                 srcs[t] = &done[k * w..k * w + w];
             }
-            update_block::<FMA>(&mut rest[(i - end) * w..(i - end) * w + w], &coeffs[..kb], &srcs[..kb]);
+            update_block::<FMA>(
+                &mut rest[(i - end) * w..(i - end) * w + w],
+                &coeffs[..kb],
+                &srcs[..kb],
+            );
         }
         k0 = end;
     }
@@ -155,7 +159,8 @@ mod tests {
         let mut a = vec![0.0; n * n];
         for i in 0..n {
             for j in 0..n {
-                a[i * n + j] = (-((i as f64 - j as f64).abs()) / 7.0).exp() + if i == j { 0.5 } else { 0.0 };
+                a[i * n + j] =
+                    (-((i as f64 - j as f64).abs()) / 7.0).exp() + if i == j { 0.5 } else { 0.0 };
             }
         }
         a

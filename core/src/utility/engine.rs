@@ -24,8 +24,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::reference::Observation;
 use super::blocked;
+use super::reference::Observation;
 use super::simd::{self, Isa, Points};
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
@@ -125,7 +125,12 @@ fn rank1_upper<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
 /// the factor so far, the Schur complement of the new block and its Cholesky, then the
 /// new rows of `L` and `W`, and the downdate of `Sigma`.
 #[inline(always)]
-fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], keep_rows: bool) -> bool {
+fn add_batch<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
     let n0 = f.pts.len();
     let m = obs.len();
     let nv = ctx.nv;
@@ -160,7 +165,14 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], k
     let mut s = vec![0.0; m * m];
     for a in 0..m {
         let pa = (newp.x[a], newp.y[a], newp.floor[a]);
-        simd::kernel_row_from::<FMA>(ctx.sf2, ctx.inv_ell, pa, &newp, a, &mut s[a * m + a..a * m + m]);
+        simd::kernel_row_from::<FMA>(
+            ctx.sf2,
+            ctx.inv_ell,
+            pa,
+            &newp,
+            a,
+            &mut s[a * m + a..a * m + m],
+        );
         s[a * m + a] += ctx.sn2 + obs[a].1;
     }
     blocked::syrk_upper_sub::<FMA>(&mut s, m, &xt, n0);
@@ -208,10 +220,14 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], k
     true
 }
 
-
 /// Adds observations to a factor, downdating its `Sigma`.
 #[inline(always)]
-fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)], keep_rows: bool) -> bool {
+fn add_all<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
     if obs.len() >= blocked::BLOCK {
         return add_batch::<FMA>(f, ctx, obs, keep_rows);
     }

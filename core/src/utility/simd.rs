@@ -177,7 +177,11 @@ pub fn kernel_row_from<const FMA: bool>(
 ) {
     let from = from.min(q.len());
     let n = (q.len() - from).min(out.len());
-    let (qx, qy, qf) = (&q.x[from..from + n], &q.y[from..from + n], &q.floor[from..from + n]);
+    let (qx, qy, qf) = (
+        &q.x[from..from + n],
+        &q.y[from..from + n],
+        &q.floor[from..from + n],
+    );
     for j in 0..n {
         let dx = p.0 - qx[j];
         let dy = p.1 - qy[j];
