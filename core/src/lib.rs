@@ -17,6 +17,7 @@ pub mod eval;
 pub mod gp;
 pub mod render;
 pub mod samples;
+pub mod session;
 pub mod synth;
 pub mod utility;
 
