@@ -11,6 +11,8 @@
 pub mod building;
 pub mod error;
 pub mod gp;
+pub mod store;
 
 pub use building::Building;
 pub use error::{Error, Result};
+pub use store::Store;
