@@ -66,28 +66,37 @@ pub struct BuildingInfo {
 /// [`MAX_IMPORT_BYTES`]: a regular file by its size before reading a byte, a stream after
 /// reading one byte more than the limit.
 pub fn read_import_text(path: &Path) -> Result<String> {
-    let too_big = |size: String| {
+    let stdin = path == Path::new("-");
+    let origin = if stdin {
+        "<stdin>".to_string()
+    } else {
+        path.display().to_string()
+    };
+    let too_big = |what: String| {
         Error::invalid(
-            &path.display().to_string(),
+            &origin,
             "$",
             format!(
-                "the file is {size}, over the import limit of {} MiB; it is not a building file",
+                "{what} over the import limit of {} MiB; it is not a building file",
                 MAX_IMPORT_BYTES / (1024 * 1024)
             ),
         )
     };
     let mut text = String::new();
-    if path == Path::new("-") {
+    if stdin {
         std::io::stdin()
             .lock()
             .take(MAX_IMPORT_BYTES + 1)
             .read_to_string(&mut text)
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| Error::io(&origin, e))?;
     } else {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
         if len > MAX_IMPORT_BYTES {
-            return Err(too_big(format!("{:.1} MiB", len as f64 / 1048576.0)));
+            return Err(too_big(format!(
+                "the file is {:.1} MiB,",
+                len as f64 / 1048576.0
+            )));
         }
         // The size can grow after the check (a file being written): cap the read as well.
         file.take(MAX_IMPORT_BYTES + 1)
@@ -95,7 +104,7 @@ pub fn read_import_text(path: &Path) -> Result<String> {
             .map_err(|e| Error::io(path, e))?;
     }
     if text.len() as u64 > MAX_IMPORT_BYTES {
-        return Err(too_big("larger than that".into()));
+        return Err(too_big("the input is".into()));
     }
     Ok(text)
 }
