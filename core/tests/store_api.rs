@@ -562,3 +562,50 @@ fn exported_file_parses_as_a_building_file() {
     let file = BuildingFile::parse(&json, "export").expect("parse");
     assert_eq!(file.format, "survey-building/1");
 }
+
+#[test]
+fn every_foreign_key_lookup_uses_an_index_on_all_its_columns() {
+    // A cascade looks children up by the foreign key's columns; without an index on all of
+    // them (or when the planner prefers a shorter primary-key prefix) it scans.
+    let store = Store::open_in_memory().expect("store");
+    import(&store, &fixtures().join("good/two_floors.json"));
+    store
+        .with_connection(|c| {
+            for t in tables(c) {
+                let mut st = c.prepare(&format!("PRAGMA foreign_key_list(\"{t}\")"))?;
+                let mut keys: BTreeMap<i64, Vec<String>> = BTreeMap::new();
+                for row in
+                    st.query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(3)?)))?
+                {
+                    let (id, col) = row?;
+                    keys.entry(id).or_default().push(col);
+                }
+                for cols in keys.values() {
+                    let cond = cols
+                        .iter()
+                        .map(|c| format!("{c}=?"))
+                        .collect::<Vec<_>>()
+                        .join(" AND ");
+                    // As the cascade does it: delete whole rows (a covering index can hide the problem).
+                    let sql = format!("EXPLAIN QUERY PLAN DELETE FROM \"{t}\" WHERE {cond}");
+                    let plan: Vec<String> = c
+                        .prepare(&sql)?
+                        .query_map(rusqlite::params_from_iter(cols.iter().map(|_| 0)), |r| {
+                            r.get::<_, String>(3)
+                        })?
+                        .collect::<Result<_, _>>()?;
+                    // The first line is the lookup itself; the others are further cascades.
+                    let first = plan.first().map_or("", String::as_str);
+                    assert!(
+                        first.starts_with("SEARCH")
+                            && cols.iter().all(|c| first.contains(&format!("{c}=?"))),
+                        "{t}({}): {}",
+                        cols.join(", "),
+                        plan.join("; ")
+                    );
+                }
+            }
+            Ok(())
+        })
+        .expect("plans");
+}
