@@ -1,6 +1,8 @@
 //! The store's API on in-memory and file databases: round trips, fits, plans, session
 //! helpers, deletes and errors.
 
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
 mod store_common;
 
 use std::collections::BTreeMap;

@@ -1,6 +1,8 @@
 //! Bad inputs through the real binary: each gives one clear `error:` line, exit code 1, and
 //! leaves the database exactly as it was (compared by a full dump).
 
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
 mod store_common;
 
 use std::io::Write;

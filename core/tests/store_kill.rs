@@ -9,6 +9,8 @@
 //! After each kill: `integrity_check` and `foreign_key_check` are clean, Area One (imported
 //! first) is intact, and the big building is absent or exactly one of its two versions.
 
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
 mod store_common;
 
 use std::io::{BufRead, BufReader};

@@ -7,6 +7,8 @@
 //! (write the dump of the version being superseded with `cargo test --test store_migrations
 //! -- --ignored write_dump_fixture` before adding the step).
 
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
 mod store_common;
 
 use std::path::{Path, PathBuf};

@@ -2,6 +2,8 @@
 //! everything the importer accepts is valid, and the bad corpus is classified as
 //! `fixtures/store/bad/expected.tsv` says (the `jsonschema` crate does the validating).
 
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
 mod store_common;
 
 use serde_json::Value;

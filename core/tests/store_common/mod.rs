@@ -1,5 +1,6 @@
 //! Helpers shared by the store tests (`core/tests/store_*.rs`).
 #![allow(dead_code)] // each test file uses a different subset
+#![allow(clippy::expect_used)] // test helpers may expect
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
