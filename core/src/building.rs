@@ -558,16 +558,13 @@ impl Building {
                 step,
                 message: format!("unknown vertex {id:?}"),
             })?;
-            if let Some(&prev) = walk.last() {
-                if self.edge_between(prev, v).is_none() {
-                    return Err(Error::InvalidWalk {
-                        step,
-                        message: format!(
-                            "no edge between {:?} and {:?}",
-                            self.vertices[prev].id, id
-                        ),
-                    });
-                }
+            if let Some(&prev) = walk.last()
+                && self.edge_between(prev, v).is_none()
+            {
+                return Err(Error::InvalidWalk {
+                    step,
+                    message: format!("no edge between {:?} and {:?}", self.vertices[prev].id, id),
+                });
             }
             walk.push(v);
         }

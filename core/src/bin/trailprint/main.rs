@@ -1,25 +1,32 @@
-//! `trailprint`: the command line of the survey planner.
+//! `trailprint`: plan Wi-Fi fingerprint survey walks from the command line.
 //!
-//! This file holds only the command enum and the dispatch; each command lives in its own
-//! `cmd_<name>.rs` with its `Args` and `run`. Errors print as `error: <message>` on stderr
-//! with exit code 1; usage errors are clap's (exit code 2).
-
-mod cmd_buildings;
-mod cmd_delete;
-mod cmd_export;
-mod cmd_import;
-mod store_cli;
+//! Each subcommand lives in its own `cmd_<name>.rs`; this file holds only the command
+//! enum and the dispatch. Errors print as `error: <message>` on stderr with exit code 1;
+//! usage errors are clap's (exit code 2). Commands that touch the database take the global
+//! `--db PATH` (helpers in `store_cli.rs`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod cmd_buildings;
+mod cmd_delete;
+mod cmd_evaluate;
+mod cmd_export;
+mod cmd_fit;
+mod cmd_generate;
+mod cmd_import;
+mod cmd_render;
+mod cmd_utility;
+mod opts;
+mod store_cli;
+
 #[derive(Parser)]
 #[command(
     name = "trailprint",
     version,
-    about = "Plans Wi-Fi fingerprint site-survey walks"
+    about = "Plan informative Wi-Fi fingerprint survey walks"
 )]
 struct Cli {
     /// Database file [default: $XDG_DATA_HOME/trailprint/trailprint.db, or
@@ -33,24 +40,39 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Import a survey-building/1 file into the database
+    /// Fit the kernel hyperparameters (sf2, ell, sn2) on a building's pilot data.
+    Fit(cmd_fit::Args),
+    /// Evaluate the utility (mutual information, nats) of one or more walks.
+    Utility(cmd_utility::Args),
+    /// Generate a synthetic building (graph, access points, pilot, test and dense survey).
+    Generate(cmd_generate::Args),
+    /// Localization error of a walk's fingerprint map (SPEC section 5).
+    Evaluate(cmd_evaluate::Args),
+    /// Draw a building, a walk and the posterior uncertainty as SVG.
+    Render(cmd_render::Args),
+    /// Import a survey-building/1 file into the database.
     Import(cmd_import::Args),
-    /// List the buildings in the database
+    /// List the buildings in the database.
     Buildings(cmd_buildings::Args),
-    /// Export a building (or its collected fingerprints) to a file
+    /// Export a building (or its collected fingerprints) to a file.
     Export(cmd_export::Args),
-    /// Delete a building and everything recorded for it
+    /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let db = cli.db.as_deref();
-    let result = match &cli.command {
-        Command::Import(args) => cmd_import::run(args, db),
-        Command::Buildings(args) => cmd_buildings::run(args, db),
-        Command::Export(args) => cmd_export::run(args, db),
-        Command::Delete(args) => cmd_delete::run(args, db),
+    let result = match cli.command {
+        Command::Fit(a) => cmd_fit::run(a),
+        Command::Utility(a) => cmd_utility::run(a),
+        Command::Generate(a) => cmd_generate::run(a),
+        Command::Evaluate(a) => cmd_evaluate::run(a),
+        Command::Render(a) => cmd_render::run(a),
+        Command::Import(a) => cmd_import::run(&a, db),
+        Command::Buildings(a) => cmd_buildings::run(&a, db),
+        Command::Export(a) => cmd_export::run(&a, db),
+        Command::Delete(a) => cmd_delete::run(&a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,469 @@
+//! Sample positions `R(P)` along a walk and their label noise (SPEC section 4).
+//!
+//! Positions are placed by arc length from the start of the walk, every `d` metres, and
+//! interpolated linearly along each edge by the fraction of that edge's length. A robot
+//! (the paper's model) labels its samples by SLAM, without extra noise. A human surveyor
+//! labels them with a step counter whose error grows with the distance walked since the
+//! last check-in; that error becomes extra observation noise through
+//! [`Kernel::label_noise`].
+//!
+//! [`WalkSampler`] produces the samples edge by edge, so that the incremental utility
+//! engine and the whole-walk function [`sample_walk`] share one piece of arithmetic and
+//! agree to the last bit.
+
+use serde::{Deserialize, Serialize};
+
+use crate::building::Building;
+use crate::gp::{Kernel, Point};
+use crate::{Error, Result};
+
+/// Arc-length tolerance of SPEC sections 3 and 4.
+pub const ARC_EPS: f64 = 1e-9;
+
+/// How the walk is surveyed: who walks and how often a scan is taken.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "model", rename_all = "snake_case")]
+pub enum SurveyorModel {
+    /// The paper's robot: a scan every `interval` metres (speed times scan period), labels
+    /// from SLAM without extra noise.
+    Robot { interval: f64 },
+    /// A person with a step counter.
+    Human {
+        /// Walking speed, m/s (default 1.2).
+        speed: f64,
+        /// Time between completed Wi-Fi scans, s (default 4).
+        scan_interval: f64,
+        /// Relative step-length error `eps` (default 0.05).
+        step_error: f64,
+        /// A vertex where the walk turns by more than this is a check-in (default 30).
+        turn_threshold_deg: f64,
+    },
+}
+
+impl Default for SurveyorModel {
+    fn default() -> Self {
+        SurveyorModel::robot()
+    }
+}
+
+impl SurveyorModel {
+    /// The paper's robot, one scan every 0.5 m.
+    pub fn robot() -> Self {
+        SurveyorModel::Robot { interval: 0.5 }
+    }
+
+    /// A human surveyor with the defaults of SPEC section 4.
+    pub fn human() -> Self {
+        SurveyorModel::Human {
+            speed: 1.2,
+            scan_interval: 4.0,
+            step_error: 0.05,
+            turn_threshold_deg: 30.0,
+        }
+    }
+
+    /// Distance between consecutive samples, metres.
+    pub fn spacing(&self) -> f64 {
+        match *self {
+            SurveyorModel::Robot { interval } => interval,
+            SurveyorModel::Human {
+                speed,
+                scan_interval,
+                ..
+            } => speed * scan_interval,
+        }
+    }
+
+    /// Checks the parameters; the message names the bad one.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, v: f64, want: &str| {
+            Err(Error::InvalidRequest(format!(
+                "surveyor model: {name} must be {want}, got {v}"
+            )))
+        };
+        match *self {
+            SurveyorModel::Robot { interval } => {
+                if !interval.is_finite() || interval < 0.01 {
+                    return bad("interval", interval, "at least 0.01 m");
+                }
+            }
+            SurveyorModel::Human {
+                speed,
+                scan_interval,
+                step_error,
+                turn_threshold_deg,
+            } => {
+                if !speed.is_finite() || speed <= 0.0 {
+                    return bad("speed", speed, "a positive number of m/s");
+                }
+                if !scan_interval.is_finite() || scan_interval <= 0.0 {
+                    return bad(
+                        "scan interval",
+                        scan_interval,
+                        "a positive number of seconds",
+                    );
+                }
+                if speed * scan_interval < 0.01 {
+                    return bad(
+                        "speed x scan interval",
+                        speed * scan_interval,
+                        "at least 0.01 m",
+                    );
+                }
+                if !step_error.is_finite() || !(0.0..=1.0).contains(&step_error) {
+                    return bad("step error", step_error, "between 0 and 1");
+                }
+                if !turn_threshold_deg.is_finite() || !(0.0..=180.0).contains(&turn_threshold_deg) {
+                    return bad(
+                        "turn threshold",
+                        turn_threshold_deg,
+                        "between 0 and 180 degrees",
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One sample of a walk.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sample {
+    /// Where the sample is taken (true position).
+    pub pos: Point,
+    /// Arc length from the start of the walk, metres.
+    pub arc: f64,
+    /// Distance walked since the last check-in, metres (0 for a robot).
+    pub since_checkin: f64,
+    /// Extra observation noise of the label, dB² (0 for a robot).
+    pub extra_noise: f64,
+}
+
+/// Turn angle at `b` between the directions `a -> b` and `b -> c`, degrees in [0, 180].
+pub fn turn_angle_deg(a: &Point, b: &Point, c: &Point) -> f64 {
+    let (x1, y1) = (b.x - a.x, b.y - a.y);
+    let (x2, y2) = (c.x - b.x, c.y - b.y);
+    let n = (x1 * x1 + y1 * y1).sqrt() * (x2 * x2 + y2 * y2).sqrt();
+    if n == 0.0 {
+        // A purely vertical move (a lift); treated as a check-in by the floor rule anyway.
+        return 180.0;
+    }
+    ((x1 * x2 + y1 * y2) / n)
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
+}
+
+/// Whether the surveyor checks in at `walk[i]` (`0 < i < len - 1`): the walk turns by
+/// more than the threshold there, or the floor changes on either side.
+pub fn is_turn_checkin(
+    building: &Building,
+    prev: usize,
+    at: usize,
+    next: usize,
+    threshold_deg: f64,
+) -> bool {
+    let (a, b, c) = (
+        building.vertices[prev].pos,
+        building.vertices[at].pos,
+        building.vertices[next].pos,
+    );
+    if a.floor != b.floor || b.floor != c.floor {
+        return true;
+    }
+    turn_angle_deg(&a, &b, &c) > threshold_deg
+}
+
+/// Incremental sample placement along a growing walk.
+///
+/// Feed vertices with [`push`](Self::push); each call returns the samples that became
+/// final. A sample within [`ARC_EPS`] of the current end vertex stays pending until the
+/// next vertex tells whether that vertex is a check-in; [`pending`](Self::pending) gives
+/// it with the noise it has if the walk ends there.
+#[derive(Debug, Clone)]
+pub struct WalkSampler {
+    model: SurveyorModel,
+    kernel: Kernel,
+    spacing: f64,
+    /// Vertices so far (only the last two matter, the rest is kept for callers).
+    walk: Vec<usize>,
+    /// Arc length at the current end vertex.
+    length: f64,
+    /// Index `k` of the next sample to place, at arc `k * spacing`.
+    next_k: u64,
+    /// Arc length of the last confirmed check-in.
+    last_checkin: f64,
+    /// A sample at the current end vertex awaiting that vertex's check-in status.
+    pending: Option<Sample>,
+}
+
+impl WalkSampler {
+    /// Starts a walk at `start`; the start is a check-in and the first sample is there.
+    pub fn new(building: &Building, start: usize, model: SurveyorModel, kernel: Kernel) -> Self {
+        let spacing = model.spacing();
+        let pos = building.vertices[start].pos;
+        WalkSampler {
+            model,
+            kernel,
+            spacing,
+            walk: vec![start],
+            length: 0.0,
+            next_k: 1,
+            last_checkin: 0.0,
+            pending: Some(Sample {
+                pos,
+                arc: 0.0,
+                since_checkin: 0.0,
+                extra_noise: 0.0,
+            }),
+        }
+    }
+
+    /// The vertices walked so far.
+    pub fn walk(&self) -> &[usize] {
+        &self.walk
+    }
+
+    /// Length of the walk so far, metres.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// The sample at the current end vertex, if one falls there.
+    pub fn pending(&self) -> Option<Sample> {
+        self.pending
+    }
+
+    /// The surveyor model in use.
+    pub fn model(&self) -> SurveyorModel {
+        self.model
+    }
+
+    fn noise_for(&self, u: f64) -> f64 {
+        match self.model {
+            SurveyorModel::Robot { .. } => 0.0,
+            SurveyorModel::Human { step_error, .. } => self.kernel.label_noise(step_error * u),
+        }
+    }
+
+    fn make(&self, pos: Point, arc: f64) -> Sample {
+        let u = match self.model {
+            SurveyorModel::Robot { .. } => 0.0,
+            SurveyorModel::Human { .. } => {
+                if arc <= self.last_checkin + ARC_EPS {
+                    0.0
+                } else {
+                    arc - self.last_checkin
+                }
+            }
+        };
+        Sample {
+            pos,
+            arc,
+            since_checkin: u,
+            extra_noise: self.noise_for(u),
+        }
+    }
+
+    /// Extends the walk to `next`, which must be a neighbour of the current end. Appends
+    /// the samples that became final to `out`.
+    pub fn push(&mut self, building: &Building, next: usize, out: &mut Vec<Sample>) -> Result<()> {
+        let at = *self.walk.last().ok_or_else(|| Error::InvalidWalk {
+            step: 0,
+            message: "empty walk".into(),
+        })?;
+        let edge = building
+            .edge_between(at, next)
+            .ok_or_else(|| Error::InvalidWalk {
+                step: self.walk.len(),
+                message: format!(
+                    "no edge between {:?} and {:?}",
+                    building.vertices[at].id, building.vertices[next].id
+                ),
+            })?;
+        // Is the current end vertex a check-in? (The start already is.)
+        if self.walk.len() >= 2 {
+            let prev = self.walk[self.walk.len() - 2];
+            if let SurveyorModel::Human {
+                turn_threshold_deg, ..
+            } = self.model
+                && is_turn_checkin(building, prev, at, next, turn_threshold_deg)
+            {
+                self.last_checkin = self.length;
+            }
+        }
+        // The pending sample at `at` is now final, with the check-in status known.
+        if let Some(p) = self.pending.take() {
+            out.push(self.make(p.pos, p.arc));
+        }
+        let start_arc = self.length;
+        let len = edge.length;
+        let end_arc = start_arc + len;
+        let (pa, pb) = (building.vertices[at].pos, building.vertices[next].pos);
+        loop {
+            let s = self.next_k as f64 * self.spacing;
+            if s > end_arc + ARC_EPS {
+                break;
+            }
+            let frac = ((s - start_arc) / len).clamp(0.0, 1.0);
+            // On a stair the floor of the nearer end, the lower one exactly at the middle.
+            let floor = if pa.floor == pb.floor || frac < 0.5 {
+                pa.floor
+            } else if frac > 0.5 {
+                pb.floor
+            } else {
+                pa.floor.min(pb.floor)
+            };
+            let pos = Point::new(
+                pa.x + frac * (pb.x - pa.x),
+                pa.y + frac * (pb.y - pa.y),
+                floor,
+            );
+            self.next_k += 1;
+            if s >= end_arc - ARC_EPS {
+                // At the new end vertex: its check-in status is not known yet.
+                self.pending = Some(Sample {
+                    pos,
+                    arc: s,
+                    since_checkin: 0.0,
+                    extra_noise: 0.0,
+                });
+            } else {
+                out.push(self.make(pos, s));
+            }
+        }
+        self.length = end_arc;
+        self.walk.push(next);
+        Ok(())
+    }
+
+    /// The pending sample with the noise it has if the walk ends at the current vertex.
+    pub fn pending_final(&self) -> Option<Sample> {
+        self.pending.map(|p| self.make(p.pos, p.arc))
+    }
+}
+
+/// All samples of a walk, in order (SPEC section 4).
+pub fn sample_walk(
+    building: &Building,
+    walk: &[usize],
+    model: &SurveyorModel,
+    kernel: &Kernel,
+) -> Result<Vec<Sample>> {
+    let Some(&start) = walk.first() else {
+        return Err(Error::InvalidWalk {
+            step: 0,
+            message: "the walk is empty".into(),
+        });
+    };
+    let mut sampler = WalkSampler::new(building, start, *model, *kernel);
+    let mut out = Vec::new();
+    for &v in &walk[1..] {
+        sampler.push(building, v, &mut out)?;
+    }
+    out.extend(sampler.pending_final());
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line() -> Building {
+        // a(0,0) - b(2,0) - c(2,1.5) ; b - d(4,0) straight on.
+        let text = r#"{"format":"survey-building/1","name":"L",
+          "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":2,"y":0},{"id":"c","x":2,"y":1.5},{"id":"d","x":4,"y":0}],
+          "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"},{"a":"b","b":"d"}]}"#;
+        Building::from_json(text, "line").expect("valid")
+    }
+
+    #[test]
+    fn robot_samples_on_a_walk_with_revisits() {
+        let b = line();
+        let k = Kernel::new(1.0, 1.0, 1.0);
+        // a -> b -> c -> b : 2 + 1.5 + 1.5 = 5 m, every 0.75 m: arcs 0, .75, ..., 4.5 (7 samples).
+        let walk = b.resolve_walk(&["a", "b", "c", "b"]).expect("walk");
+        let s =
+            sample_walk(&b, &walk, &SurveyorModel::Robot { interval: 0.75 }, &k).expect("samples");
+        assert_eq!(s.len(), 7);
+        let expect = [
+            (0.0, 0.0),
+            (0.75, 0.0),
+            (1.5, 0.0),
+            (2.0, 0.25),
+            (2.0, 1.0),
+            (2.0, 1.25),
+            (2.0, 0.5),
+        ];
+        for (got, want) in s.iter().zip(expect) {
+            assert!(
+                (got.pos.x - want.0).abs() < 1e-12 && (got.pos.y - want.1).abs() < 1e-12,
+                "{got:?} vs {want:?}"
+            );
+            assert_eq!(got.extra_noise, 0.0);
+        }
+        // Exactly at the end: 5 m with a 1.25 m interval gives 5 samples, the last at b.
+        let s =
+            sample_walk(&b, &walk, &SurveyorModel::Robot { interval: 1.25 }, &k).expect("samples");
+        assert_eq!(s.len(), 5);
+        assert!((s[4].pos.x - 2.0).abs() < 1e-12 && s[4].pos.y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn human_noise_restarts_at_checkins() {
+        let b = line();
+        let k = Kernel::new(10.0, 5.0, 1.0);
+        let model = SurveyorModel::Human {
+            speed: 1.0,
+            scan_interval: 0.5,
+            step_error: 0.1,
+            turn_threshold_deg: 30.0,
+        };
+        // a -> b -> d is straight: no check-in at b; a -> b -> c turns 90 degrees at b.
+        let straight = sample_walk(
+            &b,
+            &b.resolve_walk(&["a", "b", "d"]).expect("w"),
+            &model,
+            &k,
+        )
+        .expect("s");
+        let turning = sample_walk(
+            &b,
+            &b.resolve_walk(&["a", "b", "c"]).expect("w"),
+            &model,
+            &k,
+        )
+        .expect("s");
+        assert_eq!(straight[0].extra_noise, 0.0, "the start is a check-in");
+        assert!((straight[6].since_checkin - 3.0).abs() < 1e-12);
+        assert!((straight[6].extra_noise - k.label_noise(0.3)).abs() < 1e-15);
+        // The sample exactly at b (arc 2) has u = 0 when b is a check-in, u = 2 otherwise.
+        assert!((straight[4].since_checkin - 2.0).abs() < 1e-12);
+        assert_eq!(turning[4].since_checkin, 0.0);
+        assert_eq!(turning[4].extra_noise, 0.0);
+        assert!((turning[6].since_checkin - 1.0).abs() < 1e-12);
+        // Noise grows with the distance since the last check-in.
+        for w in straight.windows(2) {
+            assert!(w[1].extra_noise > w[0].extra_noise);
+        }
+    }
+
+    #[test]
+    fn u_turn_is_a_checkin_and_floor_of_a_stair_sample_is_the_nearer_end() {
+        let text = r#"{"format":"survey-building/1","name":"S","floors":[{"id":0},{"id":1}],
+          "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":1,"y":0},{"id":"c","x":1,"y":0,"floor":1}],
+          "edges":[{"a":"a","b":"b"},{"a":"b","b":"c","length":4}]}"#;
+        let b = Building::from_json(text, "s").expect("valid");
+        let k = Kernel::new(1.0, 1.0, 1.0);
+        let s =
+            sample_walk(&b, &[0, 1, 2], &SurveyorModel::Robot { interval: 1.0 }, &k).expect("s");
+        // arcs 0..5: on the stair (1..5) the fractions are 0, .25, .5, .75, 1.
+        let floors: Vec<i64> = s.iter().map(|s| s.pos.floor).collect();
+        assert_eq!(floors, vec![0, 0, 0, 0, 1, 1]);
+        assert!(
+            (turn_angle_deg(&b.vertices[0].pos, &b.vertices[1].pos, &b.vertices[0].pos) - 180.0)
+                .abs()
+                < 1e-9
+        );
+    }
+}

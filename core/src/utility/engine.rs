@@ -1,0 +1,593 @@
+//! The fast utility engine used by the planners.
+//!
+//! # What it computes
+//! The same `f_D(P)` as [`reference_utility`](super::reference_utility), in the "V side"
+//! form of SPEC section 3:
+//!
+//! `f = 1/2 ln det A - 1/2 ln det(A - W^T W)`, with `A = K_VV + sn2 I`,
+//! `W = L^-1 K_SV` and `L L^T = K_SS + N_S` (S = pilot locations, then the walk's samples).
+//!
+//! # Why it is fast
+//! * The pilot locations come first in `S`, so their rows of `L` and `W`, and
+//!   `Sigma_D = A - W_D^T W_D`, are computed once per building ([`UtilityEngine::new`]).
+//! * A walk's samples are appended one row at a time ([`Factor`]): a row of `L` costs
+//!   one forward substitution against the rows before it, a row of `W` one pass over
+//!   the earlier rows of `W`, and `Sigma` a rank-one downdate. A walk that extends
+//!   another starts from the other's factor ([`WalkState::mark`] / [`WalkState::rewind`],
+//!   or `Clone`), so extending by one edge costs only that edge's samples.
+//! * Only `Sigma` (vertices x vertices, 61 x 61 on area-two) is factorised per
+//!   evaluation; the big `|S| x |S|` factor is never refactorised.
+//! * The inner loops are SIMD kernels dispatched at run time ([`super::simd`]).
+//! * Many walks are evaluated in parallel with rayon ([`UtilityEngine::utilities`]).
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::blocked;
+use super::reference::Observation;
+use super::simd::{self, Isa, Points};
+use crate::building::Building;
+use crate::gp::{Kernel, Point};
+use crate::samples::{Sample, SurveyorModel, WalkSampler};
+use crate::{Error, Result};
+
+/// Constants of one engine that the numeric kernels need.
+#[derive(Debug, Clone)]
+struct Ctx {
+    sf2: f64,
+    inv_ell: f64,
+    sn2: f64,
+    vertices: Points,
+    nv: usize,
+}
+
+/// A growing factorisation: rows of `L` and `W` for the observations so far, and
+/// `Sigma = A - W^T W` (upper triangle, row-major `nv x nv`).
+#[derive(Debug, Clone)]
+pub struct Factor {
+    pts: Points,
+    /// Packed lower-triangular rows: row `i` starts at `i (i + 1) / 2`, has `i + 1` entries.
+    l: Vec<f64>,
+    inv_diag: Vec<f64>,
+    /// Row-major, `n x nv`.
+    w: Vec<f64>,
+    sigma: Vec<f64>,
+}
+
+impl Factor {
+    /// Number of observations in the factor.
+    pub fn len(&self) -> usize {
+        self.pts.len()
+    }
+
+    /// Whether the factor holds no observation.
+    pub fn is_empty(&self) -> bool {
+        self.pts.is_empty()
+    }
+
+    fn truncate(&mut self, n: usize, nv: usize) {
+        self.pts.truncate(n);
+        self.l.truncate(n * (n + 1) / 2);
+        self.inv_diag.truncate(n);
+        self.w.truncate(n * nv);
+    }
+}
+
+/// Appends one observation's rows of `L` and `W` (not `Sigma`). Returns `false` if the
+/// new diagonal is not positive.
+#[inline(always)]
+fn push_rows<const FMA: bool>(f: &mut Factor, ctx: &Ctx, p: &Point, noise: f64) -> bool {
+    let n = f.pts.len();
+    let off = n * (n + 1) / 2;
+    f.l.resize(off + n + 1, 0.0);
+    let (prev, row) = f.l.split_at_mut(off);
+    let pf = (p.x, p.y, p.floor as f64);
+    simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pf, &f.pts, &mut row[..n]);
+    for j in 0..n {
+        let oj = j * (j + 1) / 2;
+        let s = row[j] - simd::dot::<FMA>(&prev[oj..oj + j], &row[..j]);
+        row[j] = s * f.inv_diag[j];
+    }
+    let d2 = ctx.sf2 + ctx.sn2 + noise - simd::dot::<FMA>(&row[..n], &row[..n]);
+    if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
+        f.l.truncate(off);
+        return false;
+    }
+    let diag = d2.sqrt();
+    row[n] = diag;
+    let nv = ctx.nv;
+    let woff = n * nv;
+    f.w.resize(woff + nv, 0.0);
+    let (wprev, wrow) = f.w.split_at_mut(woff);
+    simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pf, &ctx.vertices, wrow);
+    for j in 0..n {
+        simd::axpy::<FMA>(-row[j], &wprev[j * nv..(j + 1) * nv], wrow);
+    }
+    let inv = 1.0 / diag;
+    for x in wrow.iter_mut() {
+        *x *= inv;
+    }
+    f.inv_diag.push(inv);
+    f.pts.push(p);
+    true
+}
+
+/// `sigma -= w w^T` on the upper triangle.
+#[inline(always)]
+fn rank1_upper<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
+    for a in 0..nv {
+        simd::axpy::<FMA>(-w[a], &w[a..nv], &mut sigma[a * nv + a..a * nv + nv]);
+    }
+}
+
+/// Appends many observations at once with the blocked kernels: the cross block against
+/// the factor so far, the Schur complement of the new block and its Cholesky, then the
+/// new rows of `L` and `W`, and the downdate of `Sigma`.
+#[inline(always)]
+fn add_batch<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
+    let n0 = f.pts.len();
+    let m = obs.len();
+    let nv = ctx.nv;
+    let mut newp = Points::default();
+    for (p, _) in obs {
+        newp.push(p);
+    }
+    // Xt (n0 x m): row j holds L^-1-transformed cross covariances, X = L^-1 K_{old,new}.
+    let mut xt = vec![0.0; n0 * m];
+    for j in 0..n0 {
+        let pj = (f.pts.x[j], f.pts.y[j], f.pts.floor[j]);
+        let (done, rest) = xt.split_at_mut(j * m);
+        let row = &mut rest[..m];
+        simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pj, &newp, row);
+        let lj = &f.l[j * (j + 1) / 2..j * (j + 1) / 2 + j];
+        let mut k0 = 0;
+        while k0 < j {
+            let kb = blocked::BLOCK.min(j - k0);
+            let mut srcs: [&[f64]; blocked::BLOCK] = [&[]; blocked::BLOCK];
+            for t in 0..kb {
+                srcs[t] = &done[(k0 + t) * m..(k0 + t) * m + m];
+            }
+            blocked::update_block::<FMA>(row, &lj[k0..k0 + kb], &srcs[..kb]);
+            k0 += kb;
+        }
+        let inv = f.inv_diag[j];
+        for x in row.iter_mut() {
+            *x *= inv;
+        }
+    }
+    // Schur complement S = K_nn + N - X^T X (upper), then S = U^T U.
+    let mut s = vec![0.0; m * m];
+    for a in 0..m {
+        let pa = (newp.x[a], newp.y[a], newp.floor[a]);
+        simd::kernel_row_from::<FMA>(
+            ctx.sf2,
+            ctx.inv_ell,
+            pa,
+            &newp,
+            a,
+            &mut s[a * m + a..a * m + m],
+        );
+        s[a * m + a] += ctx.sn2 + obs[a].1;
+    }
+    blocked::syrk_upper_sub::<FMA>(&mut s, m, &xt, n0);
+    if blocked::cholesky_upper::<FMA>(&mut s, m).is_none() {
+        return false;
+    }
+    // W rows of the new observations: (K_{new,V} - X^T W_old) solved with U^T.
+    let mut wn = vec![0.0; m * nv];
+    for i in 0..m {
+        let pi = (newp.x[i], newp.y[i], newp.floor[i]);
+        let row = &mut wn[i * nv..i * nv + nv];
+        simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pi, &ctx.vertices, row);
+        let mut j0 = 0;
+        while j0 < n0 {
+            let jb = blocked::BLOCK.min(n0 - j0);
+            let mut coeffs = [0.0; blocked::BLOCK];
+            let mut srcs: [&[f64]; blocked::BLOCK] = [&[]; blocked::BLOCK];
+            for t in 0..jb {
+                coeffs[t] = xt[(j0 + t) * m + i];
+                srcs[t] = &f.w[(j0 + t) * nv..(j0 + t) * nv + nv];
+            }
+            blocked::update_block::<FMA>(row, &coeffs[..jb], &srcs[..jb]);
+            j0 += jb;
+        }
+    }
+    blocked::solve_upper_transposed::<FMA>(&s, m, &mut wn, nv);
+    blocked::syrk_upper_sub::<FMA>(&mut f.sigma, nv, &wn, m);
+    if !keep_rows {
+        // Only Sigma is wanted (a whole walk evaluated once): skip the strided gather.
+        return true;
+    }
+    // Append the rows of L: [X^T row i, U column i].
+    f.l.reserve(m * n0 + m * (m + 1) / 2);
+    for i in 0..m {
+        for j in 0..n0 {
+            f.l.push(xt[j * m + i]);
+        }
+        for k in 0..=i {
+            f.l.push(s[k * m + i]);
+        }
+        f.inv_diag.push(1.0 / s[i * m + i]);
+        f.pts.push(&obs[i].0);
+    }
+    f.w.extend_from_slice(&wn);
+    true
+}
+
+/// Adds observations to a factor, downdating its `Sigma`.
+#[inline(always)]
+fn add_all<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
+    if obs.len() >= blocked::BLOCK {
+        return add_batch::<FMA>(f, ctx, obs, keep_rows);
+    }
+    for (p, noise) in obs {
+        if !push_rows::<FMA>(f, ctx, p, *noise) {
+            return false;
+        }
+        let n = f.pts.len();
+        let nv = ctx.nv;
+        let (w, sigma) = (&f.w[(n - 1) * nv..n * nv], &mut f.sigma);
+        rank1_upper::<FMA>(sigma, w, nv);
+    }
+    true
+}
+
+/// `ln det Sigma`, with an optional extra observation applied to a copy only.
+#[inline(always)]
+fn logdet_sigma<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    extra: Option<(Point, f64)>,
+    scratch: &mut Vec<f64>,
+) -> Option<f64> {
+    let nv = ctx.nv;
+    scratch.clear();
+    scratch.extend_from_slice(&f.sigma);
+    if let Some((p, noise)) = extra {
+        if !push_rows::<FMA>(f, ctx, &p, noise) {
+            return None;
+        }
+        let n = f.pts.len();
+        rank1_upper::<FMA>(scratch, &f.w[(n - 1) * nv..n * nv], nv);
+        f.truncate(n - 1, nv);
+    }
+    blocked::cholesky_upper::<FMA>(scratch, nv)
+}
+
+/// Arguments of the dispatched operations (one signature keeps the macro simple).
+enum DispatchArg<'a> {
+    /// Observations to add, and whether the factor's rows must be kept (false: only
+    /// `Sigma` is updated, the factor must not be extended afterwards).
+    Add(&'a [(Point, f64)], bool),
+    LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
+}
+
+enum DispatchOut {
+    Added(bool),
+    LogDet(Option<f64>),
+}
+
+#[inline(always)]
+fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
+    match a {
+        DispatchArg::Add(obs, keep) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs, keep)),
+        DispatchArg::LogDet(extra, scratch) => {
+            DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
+fn run_op_avx512(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
+    run_op::<true>(f, ctx, a)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn run_op_avx2(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
+    run_op::<true>(f, ctx, a)
+}
+
+/// Runs an operation with the kernels compiled for `isa`.
+fn dispatch(isa: Isa, f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
+    match isa {
+        // SAFETY: `Isa::detect` returns these variants only when the CPU has the features.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => unsafe { run_op_avx512(f, ctx, a) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2Fma => unsafe { run_op_avx2(f, ctx, a) },
+        _ => run_op::<false>(f, ctx, a),
+    }
+}
+
+/// The fast evaluator for one building, kernel, surveyor model and set of prior
+/// observations (the pilot data, plus anything already collected).
+#[derive(Debug, Clone)]
+pub struct UtilityEngine {
+    building: Arc<Building>,
+    kernel: Kernel,
+    model: SurveyorModel,
+    ctx: Ctx,
+    isa: Isa,
+    logdet_a: f64,
+    base: Factor,
+}
+
+impl UtilityEngine {
+    /// Conditions on the building's pilot locations.
+    pub fn new(building: Arc<Building>, kernel: Kernel, model: SurveyorModel) -> Result<Self> {
+        Self::with_prior(building, kernel, model, &[])
+    }
+
+    /// Conditions on the pilot locations plus `prior` (for example samples already
+    /// collected, or other surveyors' walks).
+    pub fn with_prior(
+        building: Arc<Building>,
+        kernel: Kernel,
+        model: SurveyorModel,
+        prior: &[Observation],
+    ) -> Result<Self> {
+        kernel.validate("kernel")?;
+        model.validate()?;
+        let mut vertices = Points::default();
+        for v in &building.vertices {
+            vertices.push(&v.pos);
+        }
+        let nv = vertices.len();
+        let ctx = Ctx {
+            sf2: kernel.sf2,
+            inv_ell: 1.0 / kernel.ell,
+            sn2: kernel.sn2,
+            vertices,
+            nv,
+        };
+        let isa = Isa::detect();
+        // A = K_VV + sn2 I (the upper triangle is what the kernels read).
+        let vpts = building.vertex_points();
+        let mut a = vec![0.0; nv * nv];
+        for i in 0..nv {
+            for j in i..nv {
+                a[i * nv + j] =
+                    kernel.k(&vpts[i], &vpts[j]) + if i == j { kernel.sn2 } else { 0.0 };
+            }
+        }
+        let mut base = Factor {
+            pts: Points::default(),
+            l: Vec::new(),
+            inv_diag: Vec::new(),
+            w: Vec::new(),
+            sigma: a.clone(),
+        };
+        let mut scratch = Vec::new();
+        let logdet_a = match dispatch(
+            isa,
+            &mut base,
+            &ctx,
+            DispatchArg::LogDet(None, &mut scratch),
+        ) {
+            DispatchOut::LogDet(Some(v)) => v,
+            _ => {
+                return Err(Error::Numerical(
+                    "K_VV + sn2 I is not positive definite".into(),
+                ));
+            }
+        };
+        let mut obs: Vec<(Point, f64)> = building.pilot.iter().map(|f| (f.point(), 0.0)).collect();
+        obs.extend(prior.iter().map(|o| (o.pos, o.extra_noise)));
+        let mut engine = UtilityEngine {
+            building,
+            kernel,
+            model,
+            ctx,
+            isa,
+            logdet_a,
+            base,
+        };
+        let mut base = std::mem::replace(
+            &mut engine.base,
+            Factor {
+                pts: Points::default(),
+                l: Vec::new(),
+                inv_diag: Vec::new(),
+                w: Vec::new(),
+                sigma: Vec::new(),
+            },
+        );
+        engine.add(&mut base, &obs)?;
+        engine.base = base;
+        Ok(engine)
+    }
+
+    fn add(&self, f: &mut Factor, obs: &[(Point, f64)]) -> Result<()> {
+        self.add_rows(f, obs, true)
+    }
+
+    fn add_rows(&self, f: &mut Factor, obs: &[(Point, f64)], keep_rows: bool) -> Result<()> {
+        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs, keep_rows)) {
+            DispatchOut::Added(true) => Ok(()),
+            _ => Err(Error::Numerical(
+                "K_SS + N_S lost positive definiteness".into(),
+            )),
+        }
+    }
+
+    fn utility_of(
+        &self,
+        f: &mut Factor,
+        extra: Option<(Point, f64)>,
+        scratch: &mut Vec<f64>,
+    ) -> Result<f64> {
+        match dispatch(self.isa, f, &self.ctx, DispatchArg::LogDet(extra, scratch)) {
+            DispatchOut::LogDet(Some(ld)) => Ok((0.5 * (self.logdet_a - ld)).max(0.0)),
+            _ => Err(Error::Numerical(
+                "posterior covariance is not positive definite".into(),
+            )),
+        }
+    }
+
+    /// The building.
+    pub fn building(&self) -> &Arc<Building> {
+        &self.building
+    }
+
+    /// The kernel.
+    pub fn kernel(&self) -> &Kernel {
+        &self.kernel
+    }
+
+    /// The surveyor model.
+    pub fn model(&self) -> &SurveyorModel {
+        &self.model
+    }
+
+    /// The instruction set the numeric kernels run on.
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// `f_D` of the prior observations alone (no walk).
+    pub fn prior_utility(&self) -> Result<f64> {
+        let mut f = self.base.clone();
+        self.utility_of(&mut f, None, &mut Vec::new())
+    }
+
+    /// A walk that starts at `start` (its first sample is there).
+    pub fn start(&self, start: usize) -> Result<WalkState<'_>> {
+        if start >= self.building.len() {
+            return Err(Error::InvalidWalk {
+                step: 0,
+                message: format!("vertex index {start} out of range"),
+            });
+        }
+        Ok(WalkState {
+            engine: self,
+            sampler: WalkSampler::new(&self.building, start, self.model, self.kernel),
+            factor: self.base.clone(),
+            buf: Vec::new(),
+            samples: 0,
+        })
+    }
+
+    /// `f_D(P)` of a walk of vertex indices. All samples are added in one blocked batch.
+    pub fn utility(&self, walk: &[usize]) -> Result<f64> {
+        if let Some(&v) = walk.iter().find(|&&v| v >= self.building.len()) {
+            return Err(Error::InvalidWalk {
+                step: 0,
+                message: format!("vertex index {v} out of range"),
+            });
+        }
+        let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
+        let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
+        let mut f = self.base.clone();
+        self.add_rows(&mut f, &obs, false)?;
+        self.utility_of(&mut f, None, &mut Vec::new())
+    }
+
+    /// `f_D` of many walks, in parallel.
+    pub fn utilities(&self, walks: &[Vec<usize>]) -> Vec<Result<f64>> {
+        walks.par_iter().map(|w| self.utility(w)).collect()
+    }
+
+    /// `f_D` of the prior plus arbitrary observations (for example samples actually
+    /// collected, with their real label noise).
+    pub fn utility_of_observations(&self, obs: &[Observation]) -> Result<f64> {
+        let mut f = self.base.clone();
+        let list: Vec<(Point, f64)> = obs.iter().map(|o| (o.pos, o.extra_noise)).collect();
+        self.add(&mut f, &list)?;
+        self.utility_of(&mut f, None, &mut Vec::new())
+    }
+}
+
+/// A saved point of a [`WalkState`] to come back to.
+#[derive(Debug, Clone)]
+pub struct Mark {
+    n: usize,
+    sigma: Vec<f64>,
+    sampler: WalkSampler,
+    samples: usize,
+}
+
+/// A walk being built vertex by vertex, with its factorisation kept up to date.
+#[derive(Debug, Clone)]
+pub struct WalkState<'e> {
+    engine: &'e UtilityEngine,
+    sampler: WalkSampler,
+    factor: Factor,
+    buf: Vec<Sample>,
+    samples: usize,
+}
+
+impl<'e> WalkState<'e> {
+    /// Extends the walk to the neighbour `v`.
+    pub fn push(&mut self, v: usize) -> Result<()> {
+        self.buf.clear();
+        self.sampler.push(&self.engine.building, v, &mut self.buf)?;
+        let obs: Vec<(Point, f64)> = self.buf.iter().map(|s| (s.pos, s.extra_noise)).collect();
+        self.samples += obs.len();
+        self.engine.add(&mut self.factor, &obs)
+    }
+
+    /// `f_D` of the walk so far, in nats.
+    pub fn utility(&mut self) -> Result<f64> {
+        let extra = self.sampler.pending_final().map(|s| (s.pos, s.extra_noise));
+        let mut scratch = Vec::with_capacity(self.factor.sigma.len());
+        self.engine
+            .utility_of(&mut self.factor, extra, &mut scratch)
+    }
+
+    /// The vertices so far.
+    pub fn walk(&self) -> &[usize] {
+        self.sampler.walk()
+    }
+
+    /// The vertex the walk ends at.
+    pub fn last(&self) -> usize {
+        *self.sampler.walk().last().unwrap_or(&0)
+    }
+
+    /// `C(P)` so far, metres.
+    pub fn length(&self) -> f64 {
+        self.sampler.length()
+    }
+
+    /// Number of samples of the walk so far (including one at the end vertex).
+    pub fn samples(&self) -> usize {
+        self.samples + usize::from(self.sampler.pending().is_some())
+    }
+
+    /// Saves the current state; [`rewind`](Self::rewind) returns to it cheaply.
+    pub fn mark(&self) -> Mark {
+        Mark {
+            n: self.factor.len(),
+            sigma: self.factor.sigma.clone(),
+            sampler: self.sampler.clone(),
+            samples: self.samples,
+        }
+    }
+
+    /// Returns to a state saved by [`mark`](Self::mark) on this walk (it must be an
+    /// ancestor of the current state).
+    pub fn rewind(&mut self, mark: &Mark) {
+        self.factor.truncate(mark.n, self.engine.ctx.nv);
+        self.factor.sigma.clone_from(&mark.sigma);
+        self.sampler = mark.sampler.clone();
+        self.samples = mark.samples;
+    }
+
+    /// The engine this walk belongs to.
+    pub fn engine(&self) -> &'e UtilityEngine {
+        self.engine
+    }
+}
