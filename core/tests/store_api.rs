@@ -292,6 +292,20 @@ fn fits_are_recorded_and_the_latest_is_returned() {
         store.record_fit(BuildingRef::Name("nope"), &fit(1, 1.0)),
         Err(Error::NotFound(_))
     ));
+
+    // What the fitter returns goes in as it is.
+    let result = trailprint::gp::fit::FitResult {
+        kernel: Kernel::new(103.22, 32.17, 3.3),
+        log_likelihood: -812.5,
+        aps_used: vec!["ap-01".into(), "ap-02".into()],
+        locations: 30,
+    };
+    store
+        .record_fit(id, &FitRecord::from_fit(&result, 4_000))
+        .expect("fit result");
+    let latest = store.latest_fit(id).expect("latest").expect("some");
+    assert_eq!(latest.record.kernel, result.kernel);
+    assert_eq!(latest.record.aps_used, result.aps_used);
 }
 
 fn plan_record() -> PlanRecord {
@@ -610,4 +624,13 @@ fn every_foreign_key_lookup_uses_an_index_on_all_its_columns() {
             Ok(())
         })
         .expect("plans");
+}
+
+#[test]
+fn store_is_shareable_across_threads() {
+    // The bindings hand one Store to many threads; readers move to their thread.
+    fn send_sync<T: Send + Sync>() {}
+    fn send<T: Send>() {}
+    send_sync::<Store>();
+    send::<trailprint::store::Reader>();
 }

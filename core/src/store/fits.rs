@@ -20,6 +20,18 @@ pub struct FitRecord {
     pub fitted_ms: i64,
 }
 
+impl FitRecord {
+    /// The record of a fit made by [`fit_kernel`](crate::gp::fit::fit_kernel) at `fitted_ms`.
+    pub fn from_fit(fit: &crate::gp::fit::FitResult, fitted_ms: i64) -> Self {
+        FitRecord {
+            kernel: fit.kernel,
+            log_likelihood: fit.log_likelihood,
+            aps_used: fit.aps_used.clone(),
+            fitted_ms,
+        }
+    }
+}
+
 /// A fit as stored.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StoredFit {
