@@ -40,6 +40,7 @@
 pub mod log;
 pub mod replan;
 pub mod sim;
+mod store_log;
 pub mod tracker;
 pub mod types;
 
@@ -169,23 +170,13 @@ impl Session {
     /// Resumes a session from its log: replays every event, then finishes an automatic
     /// replan that a kill interrupted.
     pub fn resume(log: Arc<dyn SessionLog>, session_id: i64) -> Result<Session> {
-        let row = log.session(session_id)?;
-        let settings: SessionSettings =
-            serde_json::from_value(row.settings.clone()).map_err(|e| Error::Session {
-                session: session_id,
-                message: format!("stored settings cannot be read: {e}"),
-            })?;
-        let plan = log.load_plan(row.plan_id)?;
-        let mut s = Self::open(log.clone(), session_id, row.plan_id, &plan, settings)?;
-        for entry in log.events(session_id)? {
-            s.replay(&entry)?;
-        }
+        let mut s = Self::replay_to(log, session_id, i64::MAX)?;
         s.finish_due_replan();
         Ok(s)
     }
 
-    /// The session as it was right after event `seq` (replayed, read-only use: an
-    /// interrupted automatic replan is not finished).
+    /// The session as it was right after event `seq` (replayed; an automatic replan that a
+    /// kill interrupted is not finished, so nothing is written).
     pub fn replay_to(log: Arc<dyn SessionLog>, session_id: i64, seq: i64) -> Result<Session> {
         let row = log.session(session_id)?;
         let settings: SessionSettings =

@@ -2,6 +2,7 @@ use std::sync::Arc;
 
 use super::sim::{SimOptions, World, simulate};
 use super::*;
+use crate::store::BuildingRef;
 use crate::synth::DEMO_BUILDING_JSON;
 
 // a(0,0) - b(5,0) - c(10,0) - e(10,5) ; b - d(5,5) ; d - e ; c - f(15,0)
@@ -406,4 +407,93 @@ fn replay_reproduces_the_live_state_event_by_event() {
             assert_eq!(&r.digest(), d, "state after event {seq}");
         }
     }
+}
+
+#[test]
+fn on_the_store_events_persist_resume_and_export() {
+    use crate::store::{ImportOptions, PlanRecord, Store, collected_csv};
+    let store = Arc::new(Store::open_in_memory().expect("store"));
+    let b = tee();
+    let rep = store
+        .import_building(&b, Some("tee"), &ImportOptions::default())
+        .expect("import");
+    let _ = rep;
+    let walk = ["a", "b", "c", "e"];
+    let ids = b.resolve_walk(&walk).expect("walk");
+    let plan = store
+        .save_plan(
+            BuildingRef::Name("T"),
+            &PlanRecord {
+                start: "a".into(),
+                end: "e".into(),
+                budget_m: 30.0,
+                surveyor: serde_json::Value::Null,
+                kernel: kernel(),
+                algorithm: "given".into(),
+                seed: None,
+                walk: walk.iter().map(|s| s.to_string()).collect(),
+                length_m: b.walk_length(&ids),
+                samples: 0,
+                utility_nats: 0.0,
+                elapsed_ms: 0,
+                created_ms: 0,
+            },
+        )
+        .expect("plan");
+    let log: Arc<dyn SessionLog> = store.clone();
+    let mut s = Session::start(
+        log.clone(),
+        plan,
+        human_exact_step(1.0),
+        SessionOptions::default(),
+    )
+    .expect("start");
+    let t = steps(&mut s, 0, 4);
+    s.record(Event::Scan {
+        t_ms: t,
+        readings: vec![
+            Reading {
+                bssid: "aa:01".into(),
+                rss_dbm: -61.5,
+            },
+            Reading {
+                bssid: "aa:02".into(),
+                rss_dbm: -80.0,
+            },
+        ],
+    })
+    .expect("scan");
+    let t = steps(&mut s, t, 6);
+    // A wrong turn at b: off-route at d, replanned from d.
+    let ack = s
+        .record(Event::CheckIn {
+            t_ms: t,
+            vertex: "d".into(),
+        })
+        .expect("check in");
+    assert!(ack.replan_seq.is_some());
+    let n = store.list_events(s.id(), 0).expect("events").len();
+    assert!(
+        s.record(Event::Scan {
+            t_ms: t,
+            readings: vec![Reading {
+                bssid: "x".into(),
+                rss_dbm: f64::NAN
+            }]
+        })
+        .is_err()
+    );
+    assert_eq!(store.list_events(s.id(), 0).expect("events").len(), n);
+    let r = Session::resume(log.clone(), s.id()).expect("resume");
+    assert_eq!(r.digest(), s.digest());
+    let csv = collected_csv(
+        &store
+            .list_collected(BuildingRef::Name("T"), Some(s.id()))
+            .expect("collected"),
+    );
+    assert!(
+        csv.lines().nth(1).expect("row").contains(",4.0,0.0,0,"),
+        "{csv}"
+    );
+    assert!(csv.contains("-61.5"));
 }
