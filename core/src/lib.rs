@@ -11,6 +11,7 @@
 pub mod building;
 pub mod error;
 pub mod gp;
+pub mod plan;
 pub mod samples;
 pub mod utility;
 

@@ -6,6 +6,7 @@
 use clap::{Parser, Subcommand};
 
 mod cmd_fit;
+mod cmd_plan;
 mod cmd_utility;
 mod opts;
 
@@ -26,6 +27,8 @@ enum Command {
     Fit(cmd_fit::Args),
     /// Evaluate the utility (mutual information, nats) of one or more walks.
     Utility(cmd_utility::Args),
+    /// Plan a survey walk from a start to an end vertex within a budget.
+    Plan(cmd_plan::Args),
 }
 
 fn main() {
@@ -33,6 +36,7 @@ fn main() {
     let result = match cli.command {
         Command::Fit(a) => cmd_fit::run(a),
         Command::Utility(a) => cmd_utility::run(a),
+        Command::Plan(a) => cmd_plan::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
