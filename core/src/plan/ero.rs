@@ -76,7 +76,7 @@ impl Solver for Ero {
         let mut it = 0usize;
         while it < iters {
             it += 1;
-            if it % 16 == 0 {
+            if it.is_multiple_of(16) {
                 run.check()?;
                 if run.out_of_time() {
                     term = Termination::TimeLimit;
@@ -108,7 +108,7 @@ impl Solver for Ero {
                 walk = w;
                 util = u;
             }
-            if it % 64 == 0 {
+            if it.is_multiple_of(64) {
                 let frac = if iters == usize::MAX {
                     run.time_fraction().unwrap_or(0.0)
                 } else {

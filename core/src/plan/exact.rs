@@ -234,9 +234,8 @@ impl Shared<'_> {
             if v == p.end {
                 self.offer(st.walk(), u);
             }
-            if let Some((c, d)) = self.bound {
+            if let Some((c, _)) = self.bound {
                 let future = ((self.last_sample + 1.0) - st.samples() as f64).max(0.0);
-                let _ = d;
                 if u + future * c <= self.incumbent() + 1e-12 {
                     return Ok(());
                 }
@@ -251,10 +250,7 @@ impl Shared<'_> {
             }
             let mark = st.mark();
             st.push(w)?;
-            let nh = (
-                h.0.wrapping_add(self.z[e].0),
-                h.1.wrapping_add(self.z[e].1),
-            );
+            let nh = (h.0.wrapping_add(self.z[e].0), h.1.wrapping_add(self.z[e].1));
             self.dfs(st, nh, depth + 1, split, tasks, local)?;
             st.rewind(&mark);
         }
@@ -288,7 +284,7 @@ impl Solver for Exact {
             SurveyorModel::Robot { interval } => ((p.budget + 2e-9) / interval + 1e-9).floor(),
             _ => 0.0,
         };
-        let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_b0b);
+        let mut rng = ChaCha8Rng::seed_from_u64(0x05ee_db0b);
         let z: Vec<(u64, u64)> = (0..p.building.edges.len())
             .map(|_| (rng.random(), rng.random()))
             .collect();

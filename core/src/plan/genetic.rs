@@ -120,7 +120,9 @@ pub fn insert_detour(p: &Problem, walk: &[usize], len: f64, v: usize) -> Option<
     let b = &p.building;
     let mut best = (f64::INFINITY, 0);
     for i in 0..walk.len().saturating_sub(1) {
-        let el = b.edge_between(walk[i], walk[i + 1]).map_or(0.0, |e| e.length);
+        let el = b
+            .edge_between(walk[i], walk[i + 1])
+            .map_or(0.0, |e| e.length);
         let c = m.dist(walk[i], v) + m.dist(v, walk[i + 1]) - el;
         if c < best.0 {
             best = (c, i);
@@ -135,7 +137,11 @@ pub fn insert_detour(p: &Problem, walk: &[usize], len: f64, v: usize) -> Option<
     let i = best.1;
     let mut w: Vec<usize> = walk[..=i].to_vec();
     m.extend_path(&mut w, v);
-    let back = if walk.len() == 1 { walk[0] } else { walk[i + 1] };
+    let back = if walk.len() == 1 {
+        walk[0]
+    } else {
+        walk[i + 1]
+    };
     m.extend_path(&mut w, back);
     if walk.len() > 1 {
         w.extend_from_slice(&walk[i + 2..]);

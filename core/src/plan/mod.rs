@@ -499,7 +499,12 @@ impl Problem {
     /// Whether `walk` is a feasible answer: real edges, right ends, within budget.
     pub fn check(&self, walk: &[usize]) -> Result<()> {
         self.building.check_walk(walk)?;
-        let bad = |m: String| Err(Error::InvalidWalk { step: 0, message: m });
+        let bad = |m: String| {
+            Err(Error::InvalidWalk {
+                step: 0,
+                message: m,
+            })
+        };
         match (walk.first(), walk.last()) {
             (Some(&a), Some(&b)) if a == self.start && b == self.end => {}
             _ => return bad("the walk does not run from the start to the end".into()),
@@ -549,7 +554,11 @@ pub trait Solver {
 }
 
 /// The solver for a request's algorithm, seed and parameters.
-pub fn solver_for(algorithm: Algorithm, seed: u64, params: &Params) -> Box<dyn Solver + Send + Sync> {
+pub fn solver_for(
+    algorithm: Algorithm,
+    seed: u64,
+    params: &Params,
+) -> Box<dyn Solver + Send + Sync> {
     match algorithm {
         Algorithm::Greedy => Box::new(greedy::Greedy::paper()),
         Algorithm::Genetic => Box::new(genetic::Genetic::new(*params, seed)),
@@ -588,10 +597,16 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
     let p = &req.params;
     let bad = |m: String| Err(Error::InvalidRequest(m));
     if p.population < 2 {
-        return bad(format!("population must be at least 2, got {}", p.population));
+        return bad(format!(
+            "population must be at least 2, got {}",
+            p.population
+        ));
     }
     if p.tournament < 1 {
-        return bad(format!("tournament must be at least 1, got {}", p.tournament));
+        return bad(format!(
+            "tournament must be at least 1, got {}",
+            p.tournament
+        ));
     }
     if !(0.0..=1.0).contains(&p.mutation) {
         return bad(format!(

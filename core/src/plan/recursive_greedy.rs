@@ -41,6 +41,9 @@ impl RecursiveGreedy {
     }
 }
 
+/// A walk and its utility, if one exists.
+type Found = Option<(Vec<usize>, f64)>;
+
 struct Ctx<'a> {
     p: &'a Problem,
     run: &'a Run,
@@ -76,7 +79,7 @@ impl Ctx<'_> {
         t: usize,
         budget: f64,
         depth: usize,
-    ) -> Result<Option<(Vec<usize>, f64)>> {
+    ) -> Result<Found> {
         let m = &self.p.metric;
         if m.dist(s, t) > budget + 1e-9 {
             return Ok(None);
@@ -111,7 +114,7 @@ impl Ctx<'_> {
         depth: usize,
         v: usize,
         b1: Option<f64>,
-    ) -> Result<Option<(Vec<usize>, f64)>> {
+    ) -> Result<Found> {
         let m = &self.p.metric;
         let (lo, hi) = (m.dist(s, v), budget - m.dist(v, t));
         if lo > hi + 1e-9 {
@@ -185,7 +188,7 @@ impl Solver for RecursiveGreedy {
             }
             let total = jobs.len().max(1);
             let done = std::sync::atomic::AtomicUsize::new(0);
-            let results: Vec<Result<Option<(Vec<usize>, f64)>>> = jobs
+            let results: Vec<Result<Found>> = jobs
                 .par_iter()
                 .map(|&(v, b1)| {
                     if run.should_stop() {

@@ -124,7 +124,12 @@ pub fn improve(m: &Metric, s: usize, t: usize, order: &mut Vec<usize>, max_round
         // 2-opt: reverse positions i..=j (1-based within the order).
         for i in 1..=k {
             for j in i + 1..=k {
-                let (a, b, c, d) = (at(order, i - 1), at(order, i), at(order, j), at(order, j + 1));
+                let (a, b, c, d) = (
+                    at(order, i - 1),
+                    at(order, i),
+                    at(order, j),
+                    at(order, j + 1),
+                );
                 let delta = m.dist(a, c) + m.dist(b, d) - m.dist(a, b) - m.dist(c, d);
                 if delta < -1e-9 {
                     order[i - 1..j].reverse();
