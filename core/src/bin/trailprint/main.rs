@@ -12,6 +12,7 @@ use clap::{Parser, Subcommand};
 
 mod cmd_buildings;
 mod cmd_delete;
+mod cmd_demo;
 mod cmd_evaluate;
 mod cmd_export;
 mod cmd_fit;
@@ -41,6 +42,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: load the bundled demo building into the database, fit, plan, print.
+    Demo(cmd_demo::Args),
     /// Fit the kernel hyperparameters (sf2, ell, sn2) on a building's pilot data.
     Fit(cmd_fit::Args),
     /// Evaluate the utility (mutual information, nats) of one or more walks.
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let db = cli.db.as_deref();
     let result = match cli.command {
+        Command::Demo(a) => cmd_demo::run(a, db),
         Command::Fit(a) => cmd_fit::run(a, db),
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
