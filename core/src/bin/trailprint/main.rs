@@ -12,11 +12,13 @@ use clap::{Parser, Subcommand};
 
 mod cmd_buildings;
 mod cmd_delete;
+mod cmd_demo;
 mod cmd_evaluate;
 mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
 mod cmd_import;
+mod cmd_plan;
 mod cmd_render;
 mod cmd_utility;
 mod opts;
@@ -40,6 +42,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: load the bundled demo building into the database, fit, plan, print.
+    Demo(cmd_demo::Args),
     /// Fit the kernel hyperparameters (sf2, ell, sn2) on a building's pilot data.
     Fit(cmd_fit::Args),
     /// Evaluate the utility (mutual information, nats) of one or more walks.
@@ -58,21 +62,25 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Plan a survey walk from a start to an end vertex within a budget.
+    Plan(cmd_plan::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let db = cli.db.as_deref();
     let result = match cli.command {
-        Command::Fit(a) => cmd_fit::run(a),
-        Command::Utility(a) => cmd_utility::run(a),
+        Command::Demo(a) => cmd_demo::run(a, db),
+        Command::Fit(a) => cmd_fit::run(a, db),
+        Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
-        Command::Evaluate(a) => cmd_evaluate::run(a),
-        Command::Render(a) => cmd_render::run(a),
+        Command::Evaluate(a) => cmd_evaluate::run(a, db),
+        Command::Render(a) => cmd_render::run(a, db),
         Command::Import(a) => cmd_import::run(&a, db),
         Command::Buildings(a) => cmd_buildings::run(&a, db),
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),
+        Command::Plan(a) => cmd_plan::run(a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
