@@ -33,7 +33,7 @@
 //! }
 //! let ack = s.record(Event::CheckIn { t_ms: 7000, vertex: "b".into() })?;
 //! assert!(!ack.off_route);
-//! assert!((s.progress()?.step_length_m - (20.0 * 0.7 + 4.0) / 26.0).abs() < 1e-12);
+//! assert!((s.progress()?.step_length_m - (20.0 * 0.7 + 4.0) / 25.5).abs() < 1e-12);
 //! # Ok::<(), trailprint::Error>(())
 //! ```
 
@@ -54,7 +54,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use log::{LogEntry, LogEvent, MemoryLog, PlanData, SessionLog, SessionRow};
-pub use replan::{GreedyReplanner, ReplanRequest, Replanner};
+pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
 pub use tracker::Tracker;
 pub use types::*;
 

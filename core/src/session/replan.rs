@@ -41,13 +41,57 @@ pub trait Replanner: Send + Sync {
     fn name(&self) -> String;
 }
 
-/// Greedy on utility gain per metre, keeping the end reachable within budget; the rest of
-/// the budget that no edge can use is left unused and the walk closes with a shortest path.
+/// Greedy on utility gain per metre with a short look-ahead: at each step it tries every
+/// path of up to `depth` edges from the current vertex (the depth grows with the sample
+/// spacing, so that a path can reach the next sample), keeps the end reachable within
+/// budget, and appends the path of best gain per metre; it stops when nothing gains and
+/// closes the walk with a shortest path to the end.
 ///
-/// Complexity: `O(steps x degree)` utility evaluations, each `O(|V|^3)` on the engine's
-/// `Sigma` plus the samples of one edge.
+/// Complexity: per step `O(degree^depth)` utility evaluations, each `O(|V|^3)` on the
+/// engine's `Sigma` plus the samples of the path.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct GreedyReplanner;
+
+struct Search<'a> {
+    b: &'a Building,
+    to_end: &'a [f64],
+    budget: f64,
+    current: f64,
+    path: Vec<usize>,
+    best: Option<(f64, Vec<usize>, f64)>,
+}
+
+impl Search<'_> {
+    fn explore(
+        &mut self,
+        walk: &mut crate::utility::WalkState<'_>,
+        depth: usize,
+        path_len: f64,
+    ) -> Result<()> {
+        let at = walk.last();
+        let used = walk.length();
+        for &(nb, e) in self.b.neighbours(at) {
+            let len = self.b.edges[e].length;
+            if used + len + self.to_end[nb] > self.budget + BUDGET_EPS {
+                continue;
+            }
+            let mark = walk.mark();
+            walk.push(nb)?;
+            self.path.push(nb);
+            let u = walk.utility()?;
+            let gain = (u - self.current) / (path_len + len);
+            if self.best.as_ref().is_none_or(|(g, _, _)| gain > *g) {
+                self.best = Some((gain, self.path.clone(), u));
+            }
+            if depth > 1 {
+                self.explore(walk, depth - 1, path_len + len)?;
+            }
+            self.path.pop();
+            walk.rewind(&mark);
+        }
+        Ok(())
+    }
+}
 
 impl Replanner for GreedyReplanner {
     fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
@@ -55,30 +99,30 @@ impl Replanner for GreedyReplanner {
         let to_end = distances_from(b, r.end);
         check_reachable(b, r.start, r.end, r.budget_m, &to_end)?;
         let engine = UtilityEngine::with_prior(b.clone(), r.kernel, r.model, r.prior)?;
+        let mean_edge = if b.edges.is_empty() {
+            1.0
+        } else {
+            b.total_edge_length() / b.edges.len() as f64
+        };
+        let depth = ((r.model.spacing() / mean_edge).ceil() as usize + 1).clamp(2, 5);
         let mut walk = engine.start(r.start)?;
-        let mut current = walk.utility()?;
+        let mut search = Search {
+            b,
+            to_end: &to_end,
+            budget: r.budget_m,
+            current: walk.utility()?,
+            path: Vec::new(),
+            best: None,
+        };
         loop {
-            let at = walk.last();
-            let used = walk.length();
-            let mut best: Option<(f64, usize, f64)> = None;
-            for &(nb, e) in b.neighbours(at) {
-                let len = b.edges[e].length;
-                if used + len + to_end[nb] > r.budget_m + BUDGET_EPS {
-                    continue;
-                }
-                let mark = walk.mark();
-                walk.push(nb)?;
-                let u = walk.utility()?;
-                walk.rewind(&mark);
-                let gain = (u - current) / len;
-                if best.is_none_or(|(g, _, _)| gain > g) {
-                    best = Some((gain, nb, u));
-                }
-            }
-            match best {
-                Some((gain, nb, u)) if gain > 1e-12 => {
-                    walk.push(nb)?;
-                    current = u;
+            search.best = None;
+            search.explore(&mut walk, depth, 0.0)?;
+            match search.best.take() {
+                Some((gain, path, u)) if gain > 1e-12 => {
+                    for v in path {
+                        walk.push(v)?;
+                    }
+                    search.current = u;
                 }
                 _ => break,
             }
@@ -90,7 +134,7 @@ impl Replanner for GreedyReplanner {
     }
 
     fn name(&self) -> String {
-        "greedy-replan".into()
+        "session-greedy".into()
     }
 }
 
@@ -174,4 +218,50 @@ pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>>
         out.push(v);
     }
     Ok(out)
+}
+
+/// Any planner of [`crate::plan`], conditioned on the collected samples through
+/// [`plan_with_prior`](crate::plan::plan_with_prior). Deterministic for a seed unless the
+/// algorithm stops on a time limit (`auto` does by default); a resumed session redoes an
+/// interrupted replan, so prefer a deterministic algorithm when replays must match bit for
+/// bit.
+#[derive(Debug, Clone)]
+pub struct PlannerReplanner {
+    pub algorithm: crate::plan::Algorithm,
+    pub time_limit: Option<std::time::Duration>,
+    pub params: crate::plan::Params,
+}
+
+impl PlannerReplanner {
+    pub fn new(algorithm: crate::plan::Algorithm) -> Self {
+        PlannerReplanner {
+            algorithm,
+            time_limit: None,
+            params: crate::plan::Params::default(),
+        }
+    }
+}
+
+impl Replanner for PlannerReplanner {
+    fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
+        let b = r.building;
+        let req = crate::plan::PlanRequest {
+            start: b.vertices[r.start].id.clone(),
+            end: b.vertices[r.end].id.clone(),
+            budget: r.budget_m,
+            model: r.model,
+            kernel: r.kernel,
+            algorithm: self.algorithm,
+            seed: r.seed,
+            time_limit: self.time_limit,
+            params: self.params,
+        };
+        let res =
+            crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;
+        Ok(res.walk_indices)
+    }
+
+    fn name(&self) -> String {
+        self.algorithm.name().to_string()
+    }
 }

@@ -115,8 +115,8 @@ fn guidance_names_turns_and_check_ins() {
     let g = s.guidance();
     assert_eq!(g.next_vertex.as_deref(), Some("e"));
     assert_eq!(g.turn, Turn::Arrive);
-    // 11 steps for 10 m: (20 * 1.0 + 10) / (20 + 11).
-    assert!((s.tracker().step_length_m() - 30.0 / 31.0).abs() < 1e-12);
+    // 11 steps for 10 m: (20 * 1.0 + 10) / (20 + 10.5).
+    assert!((s.tracker().step_length_m() - 30.0 / 30.5).abs() < 1e-12);
 }
 
 #[test]

@@ -8,7 +8,7 @@
 //! Dead reckoning along the planned walk from the last check-in: `u = steps x L` metres
 //! past it, held at the next check-in that is due (the surveyor waits there to confirm).
 //! The step length `L` is re-estimated at every on-route check-in from the planned length
-//! of the leg and the steps it took. Walking more than the slack past the due check-in, or
+//! of the leg and the steps it took (less half a step: the surveyor stops at the vertex). Walking more than the slack past the due check-in, or
 //! checking in at a vertex that is not on the walk between the last check-in and the due
 //! one, puts the surveyor off-route.
 //!
@@ -660,8 +660,10 @@ impl Tracker {
                 let leg = self.arc[k] - self.arc[self.anchor];
                 if self.off.is_none() {
                     if self.steps_since > 0 && leg > 0.0 {
+                        // The last step of a leg ends at the vertex, half a step short on
+                        // average: a leg of n counted steps is n - 1/2 strides long.
                         self.calib_m += leg;
-                        self.calib_steps += self.steps_since as f64;
+                        self.calib_steps += self.steps_since as f64 - 0.5;
                         if let Surveyor::Human { step_length_m, .. } = self.surveyor {
                             let w = self.options.calibration_weight_steps;
                             self.step_len =

@@ -129,8 +129,9 @@ pub struct SessionOptions {
     /// Replan automatically when the surveyor goes off-route.
     pub auto_replan: bool,
     /// Weight of the initial step length in its re-estimation, in steps: the estimate is
-    /// `(w L0 + sum of leg lengths) / (w + sum of steps)` over the legs between
-    /// consecutive on-route check-ins.
+    /// `(w L0 + sum of leg lengths) / (w + sum of (steps - 1/2))` over the legs between
+    /// consecutive on-route check-ins (the last step of a leg stops at the vertex, half a
+    /// stride short on average).
     pub calibration_weight_steps: f64,
     /// Seed of the replanner (replan `k` uses `seed + k`).
     pub seed: u64,

@@ -20,6 +20,7 @@ mod cmd_generate;
 mod cmd_import;
 mod cmd_plan;
 mod cmd_render;
+mod cmd_simulate;
 mod cmd_utility;
 mod opts;
 mod store_cli;
@@ -64,6 +65,8 @@ enum Command {
     Delete(cmd_delete::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
+    /// Plan a walk, then walk it as a survey session with a simulated surveyor.
+    Simulate(cmd_simulate::Args),
 }
 
 fn main() -> ExitCode {
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),
         Command::Plan(a) => cmd_plan::run(a, db),
+        Command::Simulate(a) => cmd_simulate::run(a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
