@@ -22,6 +22,7 @@ pub mod samples;
 pub mod session;
 pub mod store;
 pub mod synth;
+pub mod team;
 pub mod utility;
 
 pub use building::Building;

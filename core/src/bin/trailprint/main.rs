@@ -21,6 +21,7 @@ mod cmd_import;
 mod cmd_plan;
 mod cmd_render;
 mod cmd_simulate;
+mod cmd_team_plan;
 mod cmd_utility;
 mod opts;
 mod store_cli;
@@ -63,6 +64,8 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Plan walks for several surveyors that complement each other.
+    TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
     /// Plan a walk, then walk it as a survey session with a simulated surveyor.
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
     let db = cli.db.as_deref();
     let result = match cli.command {
         Command::Demo(a) => cmd_demo::run(a, db),
+        Command::TeamPlan(a) => cmd_team_plan::run(a, db),
         Command::Fit(a) => cmd_fit::run(a, db),
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
