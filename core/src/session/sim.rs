@@ -360,6 +360,17 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
                 plan.pop_front();
             }
         }
+        // The robot reports its pose on arrival at the end.
+        let end = b.vertices[at].pos;
+        if self.session.tracker().position(&b) != end {
+            self.t += dt * 0.5;
+            self.emit(Event::Pose {
+                t_ms: self.t_ms(),
+                x: end.x,
+                y: end.y,
+                floor: end.floor,
+            })?;
+        }
         Ok(())
     }
 

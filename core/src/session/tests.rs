@@ -497,3 +497,81 @@ fn on_the_store_events_persist_resume_and_export() {
     );
     assert!(csv.contains("-61.5"));
 }
+
+/// Fails every replan append, as if the process died between an off-route check-in and
+/// its replan.
+struct DiesBeforeReplan(Arc<MemoryLog>);
+
+impl SessionLog for DiesBeforeReplan {
+    fn building(&self, id: i64) -> Result<Arc<Building>> {
+        self.0.building(id)
+    }
+    fn load_plan(&self, id: i64) -> Result<PlanData> {
+        self.0.load_plan(id)
+    }
+    fn save_plan(&self, plan: &PlanData) -> Result<i64> {
+        self.0.save_plan(plan)
+    }
+    fn create_session(
+        &self,
+        b: i64,
+        p: i64,
+        settings: &serde_json::Value,
+        created_ms: i64,
+    ) -> Result<i64> {
+        self.0.create_session(b, p, settings, created_ms)
+    }
+    fn session(&self, id: i64) -> Result<SessionRow> {
+        self.0.session(id)
+    }
+    fn append(&self, id: i64, t_ms: i64, event: &LogEvent) -> Result<i64> {
+        if matches!(event, LogEvent::Replan { .. }) {
+            return Err(Error::Database {
+                path: "test".into(),
+                message: "killed".into(),
+            });
+        }
+        self.0.append(id, t_ms, event)
+    }
+    fn events(&self, id: i64) -> Result<Vec<LogEntry>> {
+        self.0.events(id)
+    }
+}
+
+#[test]
+fn resume_finishes_a_replan_that_a_kill_interrupted() {
+    let run = |log: Arc<dyn SessionLog>, mem: &Arc<MemoryLog>| {
+        let b = Arc::new(tee());
+        let bid = mem.add_building(b.clone());
+        let ids = b.resolve_walk(&["a", "b", "c", "e"]).expect("walk");
+        let pid = mem
+            .save_plan(&PlanData::for_walk(
+                bid,
+                &["a", "b", "c", "e"],
+                30.0,
+                kernel(),
+                b.walk_length(&ids),
+            ))
+            .expect("plan");
+        let mut s = Session::start(log, pid, human_exact_step(1.0), SessionOptions::default())
+            .expect("start");
+        let t = steps(&mut s, 0, 10);
+        let ack = s.record(Event::CheckIn {
+            t_ms: t,
+            vertex: "d".into(),
+        });
+        (s, ack)
+    };
+    let whole = Arc::new(MemoryLog::new());
+    let (live, ack) = run(whole.clone(), &whole);
+    assert!(ack.expect("ack").replan_seq.is_some());
+    let broken = Arc::new(MemoryLog::new());
+    let (s, ack) = run(Arc::new(DiesBeforeReplan(broken.clone())), &broken);
+    let ack = ack.expect("the check-in itself is recorded");
+    assert!(ack.replan_seq.is_none() && ack.off_route);
+    assert!(ack.replan_error.expect("why").contains("killed"));
+    assert!(s.tracker().replan_due());
+    let resumed = Session::resume(broken.clone(), s.id()).expect("resume");
+    assert_eq!(resumed.last_seq(), live.last_seq());
+    assert_eq!(resumed.digest(), live.digest());
+}

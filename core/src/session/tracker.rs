@@ -786,10 +786,19 @@ impl Tracker {
         best.1
     }
 
-    /// A robot pose; returns whether it took the robot off-route.
+    /// A robot pose; returns whether it took the robot off-route. The distance walked
+    /// follows the walk between two on-route poses (so that corners are not cut), and is
+    /// the straight line otherwise.
     fn robot_pose(&mut self, b: &Building, p: Point) -> bool {
-        self.move_pose(p);
-        match self.project(b, &p) {
+        let projected = self.project(b, &p);
+        match (self.off, self.pose, projected) {
+            (None, Some(_), Some((_, a))) => {
+                self.robot_walked_m += (a - self.robot_arc).abs();
+                self.pose = Some(p);
+            }
+            _ => self.move_pose(p),
+        }
+        match projected {
             Some((k, a)) => {
                 self.anchor = k;
                 self.robot_arc = a;
