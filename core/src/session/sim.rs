@@ -68,6 +68,12 @@ impl SimOptions {
                 self.true_step_m
             )));
         }
+        if !(0..=3_600_000).contains(&self.check_in_ms) {
+            return Err(Error::InvalidRequest(format!(
+                "the check-in pause must be between 0 and 3600 s, got {} ms",
+                self.check_in_ms
+            )));
+        }
         if !self.stride_noise.is_finite() || !(0.0..0.5).contains(&self.stride_noise) {
             return Err(Error::InvalidRequest(format!(
                 "stride noise must be in [0, 0.5), got {}",
@@ -263,11 +269,17 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             let (nxt, wrong) = self.choose(at, prev, planned);
             let len = b.edge_between(at, nxt).map_or(0.0, |e| e.length);
             let (pa, pb) = (b.vertices[at].pos, b.vertices[nxt].pos);
+            // The surveyor stops at a check-in (after a wrong turn, at the vertex reached):
+            // the last step there is a short one.
+            let stop = wrong || due || (plan.len() == 1);
             let mut s = carry;
             while s < len {
-                let stride = (self.opts.true_step_m
+                let mut stride = (self.opts.true_step_m
                     * (1.0 + self.opts.stride_noise * normal(&mut self.rng)))
                 .max(0.1);
+                if stop {
+                    stride = stride.min(len - s);
+                }
                 let dt = stride / speed * 1000.0;
                 while next_scan <= self.t + dt {
                     let frac = ((s + stride * (next_scan - self.t) / dt) / len).clamp(0.0, 1.0);
@@ -289,8 +301,7 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             }
             prev = Some(at);
             at = nxt;
-            let last = plan.len() == 1 && !wrong;
-            if wrong || due || last {
+            if stop {
                 carry = 0.0;
                 self.t += self.opts.check_in_ms as f64;
                 let ack = self.emit(Event::CheckIn {

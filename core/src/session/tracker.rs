@@ -35,8 +35,9 @@ use crate::{Error, Result};
 
 /// Arc-length tolerance for "at the same place".
 const ARC_TOL: f64 = 1e-6;
-/// How far ahead of the last projection a robot pose is searched for, metres.
-const ROBOT_LOOKAHEAD_M: f64 = 10.0;
+/// How far ahead of the last projection a robot pose is searched for: this many scan
+/// intervals, and at least 2 m (a pose is expected every interval).
+const ROBOT_LOOKAHEAD_INTERVALS: f64 = 4.0;
 
 /// Where an off-route surveyor is.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -705,8 +706,18 @@ impl Tracker {
     fn robot_check_in(&mut self, b: &Building, v: usize) -> bool {
         self.move_pose(b.vertices[v].pos);
         let from = self.anchor;
-        let found = (from..self.route.len())
-            .find(|&k| self.route[k] == v && self.arc[k] >= self.robot_arc - self.tol());
+        let found = if self.off.is_none() {
+            // On-route: the vertex must be where the robot is along the walk, give or take
+            // the tolerance and one scan interval (the last pose may lag behind).
+            let reach = self.tol() + self.surveyor.model().spacing();
+            (from..self.route.len()).find(|&k| {
+                self.route[k] == v
+                    && self.arc[k] >= self.robot_arc - self.tol()
+                    && self.arc[k] <= self.robot_arc + reach
+            })
+        } else {
+            (from..self.route.len()).find(|&k| self.route[k] == v)
+        };
         match found {
             Some(k) => {
                 self.anchor = k.min(self.route.len().saturating_sub(2));
@@ -733,8 +744,9 @@ impl Tracker {
         }
         let mut forward: Option<(usize, f64)> = None;
         let mut backward: Option<(usize, f64)> = None;
+        let lookahead = (ROBOT_LOOKAHEAD_INTERVALS * self.surveyor.model().spacing()).max(2.0);
         for k in self.anchor..n - 1 {
-            if self.arc[k] > self.robot_arc + ROBOT_LOOKAHEAD_M + tol {
+            if self.arc[k] > self.robot_arc + lookahead + tol {
                 break;
             }
             let (pa, pb) = (
@@ -786,18 +798,11 @@ impl Tracker {
         best.1
     }
 
-    /// A robot pose; returns whether it took the robot off-route. The distance walked
-    /// follows the walk between two on-route poses (so that corners are not cut), and is
-    /// the straight line otherwise.
+    /// A robot pose; returns whether it took the robot off-route. The distance walked is
+    /// the robot's odometry: straight lines between consecutive poses.
     fn robot_pose(&mut self, b: &Building, p: Point) -> bool {
         let projected = self.project(b, &p);
-        match (self.off, self.pose, projected) {
-            (None, Some(_), Some((_, a))) => {
-                self.robot_walked_m += (a - self.robot_arc).abs();
-                self.pose = Some(p);
-            }
-            _ => self.move_pose(p),
-        }
+        self.move_pose(p);
         match projected {
             Some((k, a)) => {
                 self.anchor = k;

@@ -81,6 +81,9 @@ pub struct Args {
     /// Robot: speed, m/s.
     #[arg(long, default_value_t = 0.5)]
     robot_speed: f64,
+    /// Seconds the surveyor stands at each check-in (the phone keeps scanning).
+    #[arg(long, value_name = "SECONDS", default_value_t = 2.0)]
+    check_in_pause: f64,
     /// Write the collected fingerprints to FILE (CSV, or JSON when FILE ends in .json).
     #[arg(long, value_name = "FILE")]
     export: Option<PathBuf>,
@@ -267,6 +270,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         seed: a.seed,
         true_step_m: a.true_step,
         stride_noise: a.stride_noise,
+        check_in_ms: (a.check_in_pause * 1000.0).round() as i64,
         ..SimOptions::default()
     };
     sim.validate()?;
@@ -385,10 +389,14 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             "{:?}: walked {:.1} m of the {} m budget ({:.1} m really) in {:.0} s simulated",
             s.status, s.walked_m, a.budget, report.true_walked_m, report.sim_time_s
         );
-        println!(
-            "samples {}; check-ins {}; steps {}; step length {:.3} m",
-            s.samples, s.check_ins, s.steps, s.step_length_m
-        );
+        if surveyor.is_human() {
+            println!(
+                "samples {}; check-ins {}; steps {}; step length {:.3} m",
+                s.samples, s.check_ins, s.steps, s.step_length_m
+            );
+        } else {
+            println!("samples {}; check-ins {}", s.samples, s.check_ins);
+        }
         println!(
             "utility: planned {:.2} nats, collected {:.2} nats",
             s.planned_utility_nats, s.collected_utility_nats
