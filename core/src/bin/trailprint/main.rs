@@ -11,6 +11,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod cmd_buildings;
+mod cmd_bundle;
 mod cmd_delete;
 mod cmd_demo;
 mod cmd_evaluate;
@@ -63,6 +64,8 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Export or import survey bundles (several surveyors, offline merge).
+    Bundle(cmd_bundle::Args),
     /// Plan walks for several surveyors that complement each other.
     TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
@@ -75,6 +78,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(a) => cmd_demo::run(a, db),
         Command::TeamPlan(a) => cmd_team_plan::run(a, db),
+        Command::Bundle(a) => cmd_bundle::run(a, db),
         Command::Fit(a) => cmd_fit::run(a, db),
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
