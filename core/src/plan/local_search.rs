@@ -7,6 +7,8 @@
 //!   `i < j` and go from `W[i]` to `W[j]` through another vertex instead;
 //! * **shortcut**: replace the sub-walk between `i < j` by a shortest path (frees budget
 //!   for a later insert);
+//! * **re-route**: replace the sub-walk between `i < j` by a random walk between the
+//!   same two vertices that fits the budget slack;
 //! * **2-opt**: reverse the sub-walk `W[i..=j]`, reconnecting its ends by shortest paths
 //!   (changes the visiting order of the covered vertices).
 //!
@@ -120,11 +122,45 @@ fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
         let a = rng.random_range(0..n);
         let b = rng.random_range(0..n);
         splice(p, w, i, &[a, b], j)
-    } else if kind < 85 {
+    } else if kind < 84 {
         // Shortcut.
         let i = rng.random_range(0..len - 1);
         let j = (i + rng.random_range(2..=10usize)).min(len - 1);
         splice(p, w, i, &[], j)
+    } else if kind < 92 {
+        // Re-route: replace w[i..=j] by a random walk from w[i] to w[j] that fits.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(1..=8usize)).min(len - 1);
+        let slack = p.budget - p.length(w);
+        let allowed = p.length(&w[i..=j]) + slack;
+        let mut seg = vec![w[i]];
+        let mut l = 0.0;
+        let b = &p.building;
+        let mut opts: Vec<(usize, f64)> = Vec::new();
+        loop {
+            let v = *seg.last().unwrap_or(&w[i]);
+            if v == w[j] && rng.random_bool(0.5) {
+                break;
+            }
+            opts.clear();
+            for &(x, e) in b.neighbours(v) {
+                let el = b.edges[e].length;
+                if l + el + p.metric.dist(x, w[j]) <= allowed + 1e-9 {
+                    opts.push((x, el));
+                }
+            }
+            if opts.is_empty() {
+                break;
+            }
+            let (x, el) = opts[rng.random_range(0..opts.len())];
+            seg.push(x);
+            l += el;
+        }
+        p.metric.extend_path(&mut seg, w[j]);
+        let mut out = w[..i].to_vec();
+        out.extend_from_slice(&seg);
+        out.extend_from_slice(&w[j + 1..]);
+        out
     } else {
         // 2-opt: reverse w[i..=j], 1 <= i < j <= len - 2.
         if len < 4 {
@@ -161,6 +197,19 @@ impl LocalSearch {
         walk: Vec<usize>,
         utility: f64,
     ) -> Result<(Vec<usize>, f64)> {
+        self.improve_counted(p, run, walk, utility)
+            .map(|(w, u, _)| (w, u))
+    }
+
+    /// [`improve`](Self::improve), also returning the number of walks evaluated.
+    pub fn improve_counted(
+        &self,
+        p: &Problem,
+        run: &Run,
+        walk: Vec<usize>,
+        utility: f64,
+    ) -> Result<(Vec<usize>, f64, usize)> {
+        let mut evals = 0;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let (mut walk, mut utility) = (walk, utility);
         let mut pre = Prefixes::new(p, &walk)?;
@@ -181,6 +230,7 @@ impl LocalSearch {
             if moves.is_empty() {
                 break;
             }
+            evals += moves.len();
             let us: Vec<Result<f64>> = moves
                 .par_iter()
                 .map(|m| pre.eval(m.keep, &m.walk[m.keep + 1..]))
@@ -202,6 +252,22 @@ impl LocalSearch {
                 None => idle += 1,
             }
         }
-        Ok((walk, utility))
+        Ok((walk, utility, evals))
     }
+}
+
+/// Applies `strength` random feasible moves to `walk`, whatever they do to the utility
+/// (the kick of an iterated local search).
+pub fn perturb(p: &Problem, walk: &[usize], strength: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
+    let mut w = walk.to_vec();
+    let mut done = 0;
+    let mut tries = 0;
+    while done < strength && tries < strength * 50 {
+        tries += 1;
+        if let Some(m) = random_move(p, &w, rng) {
+            w = m.walk;
+            done += 1;
+        }
+    }
+    w
 }

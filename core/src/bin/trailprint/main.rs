@@ -5,6 +5,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod cmd_bench;
 mod cmd_fit;
 mod cmd_plan;
 mod cmd_utility;
@@ -29,6 +30,8 @@ enum Command {
     Utility(cmd_utility::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
+    /// Benchmark the planners: algorithms x budgets x seeds, Markdown and CSV tables.
+    Bench(cmd_bench::Args),
 }
 
 fn main() {
@@ -37,6 +40,7 @@ fn main() {
         Command::Fit(a) => cmd_fit::run(a),
         Command::Utility(a) => cmd_utility::run(a),
         Command::Plan(a) => cmd_plan::run(a),
+        Command::Bench(a) => cmd_bench::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
