@@ -8,12 +8,16 @@
 //! 2. **Local search** ([`LocalSearch`]) from the greedy walk: detour insert, segment
 //!    replace, re-route, shortcut and 2-opt moves, evaluated in parallel from the shared
 //!    prefix.
+//!    Then, on small buildings (at most [`SIMPLE_NODE_CAP`] nodes), the best *simple*
+//!    walk (no vertex twice) by the branch and bound of [`Exact`] restricted to them.
 //! 3. **Genetic** search with the paper's operators, its initial population seeded with
 //!    the walks of stages 1 and 2 (so it can only improve on them). Its population is the
 //!    request's (200) when the work budget allows, smaller on large instances.
 //! 4. **Local search** from the best few distinct members of the final population.
-//! 5. **Iterated local search**: kick the best walk with a few random moves, search
-//!    locally again, keep the better, until the work budget or the deadline is used up.
+//! 5. **Iterated local search**: kick the current walk with a few random moves, search
+//!    locally again; the current walk may drift to slightly worse local optima and
+//!    returns to the best after a few kicks without progress; until the work budget or
+//!    the deadline is used up.
 //! 6. **Exact** branch and bound seeded with the best walk when a quick count shows the
 //!    search tree is small (at most [`EXACT_NODE_CAP`] nodes under the feasibility rule):
 //!    if it finishes, the walk is proved optimal (`optimal: true`).
@@ -36,9 +40,40 @@ use crate::Result;
 /// Largest feasibility-pruned tree for which `auto` runs the exact search.
 pub const EXACT_NODE_CAP: u64 = 200_000;
 
+/// Largest simple-walk tree for which `auto` searches all simple walks.
+pub const SIMPLE_NODE_CAP: u64 = 20_000;
+
+/// Number of nodes of the simple-walk tree (no vertex twice, the end vertex only as the
+/// last step) under the feasibility rule, counting up to `cap`.
+pub fn count_simple(p: &Problem, cap: u64) -> u64 {
+    fn rec(p: &Problem, v: usize, len: f64, on: &mut [bool], count: &mut u64, cap: u64) {
+        *count += 1;
+        if *count > cap || (v == p.end && len > 0.0) {
+            return;
+        }
+        for &(w, e) in p.building.neighbours(v) {
+            let l = len + p.building.edges[e].length;
+            if p.fits(l + p.metric.dist(w, p.end)) && (w == p.end || !on[w]) {
+                on[w] = true;
+                rec(p, w, l, on, count, cap);
+                on[w] = w == p.start;
+                if *count > cap {
+                    return;
+                }
+            }
+        }
+    }
+    let mut on = vec![false; p.building.len()];
+    on[p.start] = true;
+    let mut count = 0;
+    rec(p, p.start, 0.0, &mut on, &mut count, cap);
+    count
+}
+
 /// Cost-model units of work per second of time limit (calibrated so that the default
-/// 2 s suffice on a loaded two-core machine: about 1.5e9 units per second).
-pub const UNITS_PER_SECOND: f64 = 1.5e9;
+/// 2 s suffice on a loaded two-core machine: the engine does about 1.6e9 per second
+/// per thread).
+pub const UNITS_PER_SECOND: f64 = 2.5e9;
 
 /// The `auto` solver.
 #[derive(Debug, Clone)]
@@ -82,10 +117,15 @@ pub fn count_nodes(p: &Problem, cap: u64) -> u64 {
     count
 }
 
-/// Cost-model units of one evaluation of a walk of full budget.
+/// Most walk evaluations `auto` spends, however long its time limit: beyond this the
+/// iterated local search has long converged on the buildings we know.
+pub const MAX_EVALS: usize = 20_000;
+
+/// Cost-model units of one evaluation of a walk of full budget: `(|D| + B/d)^2 |V|`
+/// plus a fixed overhead for generating and bookkeeping the move.
 pub fn eval_units(p: &Problem) -> f64 {
     let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
-    n * n * p.building.len() as f64
+    n * n * p.building.len() as f64 + 20_000.0
 }
 
 impl Solver for Auto {
@@ -97,7 +137,8 @@ impl Solver for Auto {
         // From the configured limit, not the time left, so that the work is deterministic.
         let secs = run.time_limit().map_or(2.0, |d| d.as_secs_f64());
         // Evaluations the work budget allows.
-        let budget_evals = (secs * UNITS_PER_SECOND / eval_units(p)).max(50.0) as usize;
+        let budget_evals =
+            (secs * UNITS_PER_SECOND / eval_units(p)).clamp(50.0, MAX_EVALS as f64) as usize;
         let mut used = 0usize;
         let report = |f: f64, u: f64, m: &str| run.report(Algorithm::Auto, f, Some(u), m.into());
 
@@ -116,6 +157,18 @@ impl Solver for Auto {
             util = u;
         }
         report(0.2, util, "local search");
+
+        // 2b. Best simple walk, when there are few (small buildings).
+        if !run.should_stop() && count_simple(p, SIMPLE_NODE_CAP) <= SIMPLE_NODE_CAP {
+            let ex = Exact::simple_walks(SIMPLE_NODE_CAP * 2)
+                .with_incumbent(walk.clone())
+                .solve(p, run)?;
+            used += (SIMPLE_NODE_CAP / 8) as usize;
+            if better((&ex.walk, ex.utility), (&walk, util)) {
+                walk = ex.walk;
+                util = ex.utility;
+            }
+        }
 
         // 3. Genetic, seeded, sized to about 40% of the work budget.
         let mut pop = Vec::new();
@@ -152,19 +205,34 @@ impl Solver for Auto {
         }
         report(0.7, util, "restarts");
 
-        // 5. Iterated local search.
+        // 5. Iterated local search: kicks of 2 to 5 random moves; the current walk may
+        //    drift to a local optimum up to 0.3% worse; back to the best after 8 kicks
+        //    without a new best.
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x9e37_79b9_7f4a_7c15);
+        let (mut cur, mut cur_u) = (walk.clone(), util);
         let mut kick = 0u64;
+        let mut stale = 0;
         while used < budget_evals && !run.should_stop() {
             kick += 1;
-            let start = perturb(p, &walk, 3, &mut rng);
+            let start = perturb(p, &cur, 2 + (kick % 4) as usize, &mut rng);
             let su = p.utility(&start)?;
             let ls = LocalSearch::new(self.seed.wrapping_add(1000 + kick));
             let (w, u, n) = ls.improve_counted(p, run, start, su)?;
             used += n + 1;
+            stale += 1;
             if better((&w, u), (&walk, util)) {
-                walk = w;
+                walk = w.clone();
                 util = u;
+                stale = 0;
+            }
+            if u >= cur_u - 0.003 * cur_u.abs() {
+                cur = w;
+                cur_u = u;
+            }
+            if stale >= 8 {
+                cur = walk.clone();
+                cur_u = util;
+                stale = 0;
             }
         }
         report(0.9, util, "iterated local search");

@@ -231,7 +231,7 @@ pub fn to_markdown(sum: &[Summary]) -> String {
                 .map(|x| x.max)
                 .fold(f64::NEG_INFINITY, f64::max);
             let gap = if best > 0.0 {
-                100.0 * (best - r.mean) / best
+                (100.0 * (best - r.mean) / best).max(0.0)
             } else {
                 0.0
             };

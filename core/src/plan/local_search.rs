@@ -5,6 +5,8 @@
 //!   where it costs least (or at a random position);
 //! * **segment replace** (remove + insert, a "swap"): cut the sub-walk between positions
 //!   `i < j` and go from `W[i]` to `W[j]` through another vertex instead;
+//! * **bulge move**: shortcut a sub-walk and spend the freed length on a detour
+//!   elsewhere;
 //! * **shortcut**: replace the sub-walk between `i < j` by a shortest path (frees budget
 //!   for a later insert);
 //! * **re-route**: replace the sub-walk between `i < j` by a random walk between the
@@ -41,8 +43,8 @@ impl LocalSearch {
     pub fn new(seed: u64) -> Self {
         LocalSearch {
             seed,
-            batch: 32,
-            patience: 12,
+            batch: 16,
+            patience: 16,
             max_rounds: 10_000,
         }
     }
@@ -94,8 +96,27 @@ fn splice(p: &Problem, w: &[usize], i: usize, via: &[usize], j: usize) -> Vec<us
     out
 }
 
+/// A random vertex `v` such that going `w[i] -> v -> w[j]` instead of `w[i..=j]` fits
+/// the budget and changes the walk.
+fn reachable(p: &Problem, w: &[usize], i: usize, j: usize, rng: &mut ChaCha8Rng) -> Option<usize> {
+    let m = &p.metric;
+    let allowed = p.budget - p.length(w) + p.length(&w[i..=j]) + 1e-9;
+    let cands: Vec<usize> = (0..p.building.len())
+        .filter(|&v| m.dist(w[i], v) + m.dist(v, w[j]) <= allowed && !w[i..=j].contains(&v))
+        .collect();
+    if cands.is_empty() {
+        None
+    } else {
+        Some(cands[rng.random_range(0..cands.len())])
+    }
+}
+
 /// Draws one random move; `None` if it does not fit or changes nothing.
 fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
+    random_move_at(p, w, rng, 0)
+}
+
+fn random_move_at(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng, depth: usize) -> Option<Move> {
     let n = p.building.len();
     let len = w.len();
     let kind = rng.random_range(0..100u32);
@@ -105,15 +126,33 @@ fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
         let (nw, _) = super::genetic::insert_detour(p, w, p.length(w), v)?;
         nw
     } else if kind < 40 {
-        // Detour at a random position.
-        let v = rng.random_range(0..n);
+        // Detour at a random position, through a vertex the slack can reach.
         let i = rng.random_range(0..len - 1);
+        let v = reachable(p, w, i, i + 1, rng)?;
         splice(p, w, i, &[v], i + 1)
+    } else if kind < 55 {
+        // Move a bulge: shortcut the segment i..j, then spend the freed length on a
+        // detour at another random position.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(2..=10usize)).min(len - 1);
+        let cut = splice(p, w, i, &[], j);
+        if cut.len() < 2 {
+            return None;
+        }
+        if depth > 0 || rng.random_bool(0.5) {
+            let k = rng.random_range(0..cut.len() - 1);
+            let v = reachable(p, &cut, k, k + 1, rng)?;
+            splice(p, &cut, k, &[v], k + 1)
+        } else {
+            // Or any other move on the shortened walk (a replace or re-route can now use
+            // the freed length).
+            random_move_at(p, &cut, rng, depth + 1)?.walk
+        }
     } else if kind < 75 {
-        // Replace the segment i..j by a detour through v.
+        // Replace the segment i..j by a detour through a vertex that fits.
         let i = rng.random_range(0..len - 1);
         let j = (i + rng.random_range(1..=8usize)).min(len - 1);
-        let v = rng.random_range(0..n);
+        let v = reachable(p, w, i, j, rng)?;
         splice(p, w, i, &[v], j)
     } else if kind < 82 {
         // Replace the segment i..j by a detour through two vertices.
