@@ -646,6 +646,19 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
 /// # Errors
 /// See [`validate`]; [`Error::Cancelled`] when cancelled through `control`.
 pub fn plan(building: Arc<Building>, req: &PlanRequest, control: &Control) -> Result<PlanResult> {
+    plan_with_prior(building, req, &[], control)
+}
+
+/// Plans a walk whose utility is conditioned on the pilot data plus `prior`
+/// observations: samples already collected (replanning a survey in progress) or the walks
+/// of other surveyors (team planning). The utility reported is then the information the
+/// walk adds on top of all of them, `f_{D + prior}(P)`.
+pub fn plan_with_prior(
+    building: Arc<Building>,
+    req: &PlanRequest,
+    prior: &[crate::utility::Observation],
+    control: &Control,
+) -> Result<PlanResult> {
     let (start, end) = validate(&building, req)?;
     let run = Run::new(control.clone(), req.effective_time_limit());
     let metric = Arc::new(Metric::new(&building));
@@ -658,7 +671,7 @@ pub fn plan(building: Arc<Building>, req: &PlanRequest, control: &Control) -> Re
             shortest,
         });
     }
-    let engine = UtilityEngine::new(building.clone(), req.kernel, req.model)?;
+    let engine = UtilityEngine::with_prior(building.clone(), req.kernel, req.model, prior)?;
     let problem = Problem {
         building: building.clone(),
         engine,

@@ -4,7 +4,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use clap::Args as ClapArgs;
-use trailprint::plan::{Algorithm, Params, PlanRequest, plan};
+use trailprint::plan::{Algorithm, Params, PlanRequest, plan_with_prior};
+use trailprint::store::PlanRecord;
 use trailprint::{Error, Result};
 
 use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
@@ -65,8 +66,8 @@ fn parse_algorithm(s: &str) -> std::result::Result<Algorithm, String> {
     Algorithm::from_name(s).map_err(|e| e.to_string())
 }
 
-pub fn run(a: Args) -> Result<()> {
-    let b = Arc::new(a.building.load()?);
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = Arc::new(a.building.load(db)?);
     let model = a.model.model()?;
     let (kernel, source) = a.kernel.resolve(&b)?;
     let time_limit = match a.time_limit {
@@ -97,10 +98,36 @@ pub fn run(a: Args) -> Result<()> {
             iterations: a.iterations,
         },
     };
-    let r = plan(b.clone(), &req, &trailprint::plan::Control::new())?;
-    if a.json {
-        println!("{}", json_line(&r)?);
+    // A new walk should go where the data is thinnest: condition on everything already
+    // collected in this building (nothing for a building read from a file).
+    let prior = crate::store_cli::collected_prior(&a.building.building, db, &kernel)?;
+    let r = plan_with_prior(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
+    // A building from the database keeps its plans there; a file has nowhere to keep them.
+    let plan_id = if crate::store_cli::is_file_spec(&a.building.building) {
+        None
     } else {
+        let store = crate::store_cli::open_store(db)?;
+        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+        let record = PlanRecord::from_plan(&req, &r, trailprint::store::now_ms());
+        Some(store.save_plan(bref, &record)?)
+    };
+    if a.json {
+        let mut v = serde_json::to_value(&r)
+            .map_err(|e| Error::InvalidRequest(format!("JSON output: {e}")))?;
+        if let (Some(id), Some(obj)) = (plan_id, v.as_object_mut()) {
+            obj.insert("plan_id".into(), id.into());
+        }
+        println!("{}", json_line(&v)?);
+    } else {
+        if let Some(id) = plan_id {
+            println!("plan id       {id}");
+        }
+        if !prior.is_empty() {
+            println!(
+                "conditioned   on {} fingerprints already collected",
+                prior.len()
+            );
+        }
         println!("building      {}", b.name);
         println!("algorithm     {}", r.algorithm);
         println!(
