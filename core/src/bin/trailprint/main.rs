@@ -10,6 +10,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod cmd_bench;
 mod cmd_buildings;
 mod cmd_bundle;
 mod cmd_delete;
@@ -70,6 +71,8 @@ enum Command {
     TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
+    /// Benchmark the planners: algorithms x budgets x seeds, Markdown and CSV tables.
+    Bench(cmd_bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -89,6 +92,7 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),
         Command::Plan(a) => cmd_plan::run(a, db),
+        Command::Bench(a) => cmd_bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
