@@ -19,6 +19,7 @@ pub mod gp;
 pub mod plan;
 pub mod render;
 pub mod samples;
+pub mod session;
 pub mod store;
 pub mod synth;
 pub mod team;

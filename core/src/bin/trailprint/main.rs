@@ -22,6 +22,7 @@ mod cmd_generate;
 mod cmd_import;
 mod cmd_plan;
 mod cmd_render;
+mod cmd_simulate;
 mod cmd_team_plan;
 mod cmd_utility;
 mod opts;
@@ -73,6 +74,8 @@ enum Command {
     Plan(cmd_plan::Args),
     /// Benchmark the planners: algorithms x budgets x seeds, Markdown and CSV tables.
     Bench(cmd_bench::Args),
+    /// Plan a walk, then walk it as a survey session with a simulated surveyor.
+    Simulate(cmd_simulate::Args),
 }
 
 fn main() -> ExitCode {
@@ -93,6 +96,7 @@ fn main() -> ExitCode {
         Command::Delete(a) => cmd_delete::run(&a, db),
         Command::Plan(a) => cmd_plan::run(a, db),
         Command::Bench(a) => cmd_bench::run(a),
+        Command::Simulate(a) => cmd_simulate::run(a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
