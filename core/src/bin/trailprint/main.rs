@@ -16,6 +16,7 @@ mod cmd_bundle;
 mod cmd_delete;
 mod cmd_demo;
 mod cmd_evaluate;
+mod cmd_experiment;
 mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
@@ -56,6 +57,8 @@ enum Command {
     Generate(cmd_generate::Args),
     /// Localization error of a walk's fingerprint map (SPEC section 5).
     Evaluate(cmd_evaluate::Args),
+    /// The paper's evaluation: algorithms x budgets x runs, CSV and SVG charts.
+    Experiment(cmd_experiment::Args),
     /// Draw a building, a walk and the posterior uncertainty as SVG.
     Render(cmd_render::Args),
     /// Import a survey-building/1 file into the database.
@@ -89,6 +92,7 @@ fn main() -> ExitCode {
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
         Command::Evaluate(a) => cmd_evaluate::run(a, db),
+        Command::Experiment(a) => cmd_experiment::run(a, db),
         Command::Render(a) => cmd_render::run(a, db),
         Command::Import(a) => cmd_import::run(&a, db),
         Command::Buildings(a) => cmd_buildings::run(&a, db),
