@@ -234,7 +234,7 @@ fn walks_are_resolved_and_checked() {
 fn shared_instances_load() {
     for name in ["area-one.json", "area-two.json"] {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../shared/instances")
+            .join("tests/fixtures")
             .join(name);
         let b = Building::load(&path).expect("shared instance is valid");
         assert!(b.len() > 20 && !b.pilot.is_empty());

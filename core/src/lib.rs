@@ -6,12 +6,18 @@
 //! positions along a walk for a robot or a human surveyor ([`samples`]), and the mutual
 //! information utility that the planners maximise ([`utility`]).
 //!
+//! Around the planner: synthetic buildings and their radio world ([`synth`]), the
+//! localization evaluation of SPEC section 5 ([`eval`]) and SVG drawings ([`render`]).
+//!
 //! This crate knows nothing of FFI; `bindings/` translates its types for Kotlin.
 
 pub mod building;
 pub mod error;
+pub mod eval;
 pub mod gp;
+pub mod render;
 pub mod samples;
+pub mod synth;
 pub mod utility;
 
 pub use building::Building;

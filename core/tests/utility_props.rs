@@ -12,7 +12,7 @@ use trailprint::utility::{UtilityEngine, reference_utility};
 
 fn instance(name: &str) -> Arc<Building> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/instances")
+        .join("tests/fixtures")
         .join(name);
     Arc::new(Building::load(&path).expect("shared instance"))
 }

@@ -2,6 +2,7 @@
 
 pub mod fit;
 pub mod kernel;
+pub mod predict;
 
 pub use fit::{FitResult, fit_kernel};
 pub use kernel::{Kernel, Point};

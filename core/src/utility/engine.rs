@@ -24,6 +24,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use super::blocked;
 use super::reference::Observation;
 use super::simd::{self, Isa, Points};
 use crate::building::Building;
@@ -42,7 +43,7 @@ struct Ctx {
 }
 
 /// A growing factorisation: rows of `L` and `W` for the observations so far, and
-/// `Sigma = A - W^T W` (lower triangle, row-major `nv x nv`).
+/// `Sigma = A - W^T W` (upper triangle, row-major `nv x nv`).
 #[derive(Debug, Clone)]
 pub struct Factor {
     pts: Points,
@@ -112,41 +113,124 @@ fn push_rows<const FMA: bool>(f: &mut Factor, ctx: &Ctx, p: &Point, noise: f64) 
     true
 }
 
-/// `sigma -= w w^T` on the lower triangle.
+/// `sigma -= w w^T` on the upper triangle.
 #[inline(always)]
-fn rank1_lower<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
+fn rank1_upper<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
     for a in 0..nv {
-        simd::axpy::<FMA>(-w[a], &w[..=a], &mut sigma[a * nv..a * nv + a + 1]);
+        simd::axpy::<FMA>(-w[a], &w[a..nv], &mut sigma[a * nv + a..a * nv + nv]);
     }
 }
 
-/// In-place Cholesky of the lower triangle of a row-major `n x n` matrix; returns
-/// `ln det`, or `None` if the matrix is not positive definite.
+/// Appends many observations at once with the blocked kernels: the cross block against
+/// the factor so far, the Schur complement of the new block and its Cholesky, then the
+/// new rows of `L` and `W`, and the downdate of `Sigma`.
 #[inline(always)]
-fn chol_logdet<const FMA: bool>(a: &mut [f64], n: usize) -> Option<f64> {
-    let mut logdet = 0.0;
-    for i in 0..n {
-        let (done, rest) = a.split_at_mut(i * n);
-        let row = &mut rest[..n];
-        for j in 0..i {
-            let rj = &done[j * n..j * n + n];
-            let s = row[j] - simd::dot::<FMA>(&rj[..j], &row[..j]);
-            row[j] = s / rj[j];
-        }
-        let d2 = row[i] - simd::dot::<FMA>(&row[..i], &row[..i]);
-        if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
-            return None;
-        }
-        let d = d2.sqrt();
-        row[i] = d;
-        logdet += d2.ln();
+fn add_batch<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
+    let n0 = f.pts.len();
+    let m = obs.len();
+    let nv = ctx.nv;
+    let mut newp = Points::default();
+    for (p, _) in obs {
+        newp.push(p);
     }
-    Some(logdet)
+    // Xt (n0 x m): row j holds L^-1-transformed cross covariances, X = L^-1 K_{old,new}.
+    let mut xt = vec![0.0; n0 * m];
+    for j in 0..n0 {
+        let pj = (f.pts.x[j], f.pts.y[j], f.pts.floor[j]);
+        let (done, rest) = xt.split_at_mut(j * m);
+        let row = &mut rest[..m];
+        simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pj, &newp, row);
+        let lj = &f.l[j * (j + 1) / 2..j * (j + 1) / 2 + j];
+        let mut k0 = 0;
+        while k0 < j {
+            let kb = blocked::BLOCK.min(j - k0);
+            let mut srcs: [&[f64]; blocked::BLOCK] = [&[]; blocked::BLOCK];
+            for t in 0..kb {
+                srcs[t] = &done[(k0 + t) * m..(k0 + t) * m + m];
+            }
+            blocked::update_block::<FMA>(row, &lj[k0..k0 + kb], &srcs[..kb]);
+            k0 += kb;
+        }
+        let inv = f.inv_diag[j];
+        for x in row.iter_mut() {
+            *x *= inv;
+        }
+    }
+    // Schur complement S = K_nn + N - X^T X (upper), then S = U^T U.
+    let mut s = vec![0.0; m * m];
+    for a in 0..m {
+        let pa = (newp.x[a], newp.y[a], newp.floor[a]);
+        simd::kernel_row_from::<FMA>(
+            ctx.sf2,
+            ctx.inv_ell,
+            pa,
+            &newp,
+            a,
+            &mut s[a * m + a..a * m + m],
+        );
+        s[a * m + a] += ctx.sn2 + obs[a].1;
+    }
+    blocked::syrk_upper_sub::<FMA>(&mut s, m, &xt, n0);
+    if blocked::cholesky_upper::<FMA>(&mut s, m).is_none() {
+        return false;
+    }
+    // W rows of the new observations: (K_{new,V} - X^T W_old) solved with U^T.
+    let mut wn = vec![0.0; m * nv];
+    for i in 0..m {
+        let pi = (newp.x[i], newp.y[i], newp.floor[i]);
+        let row = &mut wn[i * nv..i * nv + nv];
+        simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pi, &ctx.vertices, row);
+        let mut j0 = 0;
+        while j0 < n0 {
+            let jb = blocked::BLOCK.min(n0 - j0);
+            let mut coeffs = [0.0; blocked::BLOCK];
+            let mut srcs: [&[f64]; blocked::BLOCK] = [&[]; blocked::BLOCK];
+            for t in 0..jb {
+                coeffs[t] = xt[(j0 + t) * m + i];
+                srcs[t] = &f.w[(j0 + t) * nv..(j0 + t) * nv + nv];
+            }
+            blocked::update_block::<FMA>(row, &coeffs[..jb], &srcs[..jb]);
+            j0 += jb;
+        }
+    }
+    blocked::solve_upper_transposed::<FMA>(&s, m, &mut wn, nv);
+    blocked::syrk_upper_sub::<FMA>(&mut f.sigma, nv, &wn, m);
+    if !keep_rows {
+        // Only Sigma is wanted (a whole walk evaluated once): skip the strided gather.
+        return true;
+    }
+    // Append the rows of L: [X^T row i, U column i].
+    f.l.reserve(m * n0 + m * (m + 1) / 2);
+    for i in 0..m {
+        for j in 0..n0 {
+            f.l.push(xt[j * m + i]);
+        }
+        for k in 0..=i {
+            f.l.push(s[k * m + i]);
+        }
+        f.inv_diag.push(1.0 / s[i * m + i]);
+        f.pts.push(&obs[i].0);
+    }
+    f.w.extend_from_slice(&wn);
+    true
 }
 
 /// Adds observations to a factor, downdating its `Sigma`.
 #[inline(always)]
-fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> bool {
+fn add_all<const FMA: bool>(
+    f: &mut Factor,
+    ctx: &Ctx,
+    obs: &[(Point, f64)],
+    keep_rows: bool,
+) -> bool {
+    if obs.len() >= blocked::BLOCK {
+        return add_batch::<FMA>(f, ctx, obs, keep_rows);
+    }
     for (p, noise) in obs {
         if !push_rows::<FMA>(f, ctx, p, *noise) {
             return false;
@@ -154,7 +238,7 @@ fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> 
         let n = f.pts.len();
         let nv = ctx.nv;
         let (w, sigma) = (&f.w[(n - 1) * nv..n * nv], &mut f.sigma);
-        rank1_lower::<FMA>(sigma, w, nv);
+        rank1_upper::<FMA>(sigma, w, nv);
     }
     true
 }
@@ -175,15 +259,17 @@ fn logdet_sigma<const FMA: bool>(
             return None;
         }
         let n = f.pts.len();
-        rank1_lower::<FMA>(scratch, &f.w[(n - 1) * nv..n * nv], nv);
+        rank1_upper::<FMA>(scratch, &f.w[(n - 1) * nv..n * nv], nv);
         f.truncate(n - 1, nv);
     }
-    chol_logdet::<FMA>(scratch, nv)
+    blocked::cholesky_upper::<FMA>(scratch, nv)
 }
 
 /// Arguments of the dispatched operations (one signature keeps the macro simple).
 enum DispatchArg<'a> {
-    Add(&'a [(Point, f64)]),
+    /// Observations to add, and whether the factor's rows must be kept (false: only
+    /// `Sigma` is updated, the factor must not be extended afterwards).
+    Add(&'a [(Point, f64)], bool),
     LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
 }
 
@@ -195,7 +281,7 @@ enum DispatchOut {
 #[inline(always)]
 fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
     match a {
-        DispatchArg::Add(obs) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs)),
+        DispatchArg::Add(obs, keep) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs, keep)),
         DispatchArg::LogDet(extra, scratch) => {
             DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
         }
@@ -268,11 +354,11 @@ impl UtilityEngine {
             nv,
         };
         let isa = Isa::detect();
-        // A = K_VV + sn2 I (lower triangle is what the kernels read).
+        // A = K_VV + sn2 I (the upper triangle is what the kernels read).
         let vpts = building.vertex_points();
         let mut a = vec![0.0; nv * nv];
         for i in 0..nv {
-            for j in 0..=i {
+            for j in i..nv {
                 a[i * nv + j] =
                     kernel.k(&vpts[i], &vpts[j]) + if i == j { kernel.sn2 } else { 0.0 };
             }
@@ -325,7 +411,11 @@ impl UtilityEngine {
     }
 
     fn add(&self, f: &mut Factor, obs: &[(Point, f64)]) -> Result<()> {
-        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs)) {
+        self.add_rows(f, obs, true)
+    }
+
+    fn add_rows(&self, f: &mut Factor, obs: &[(Point, f64)], keep_rows: bool) -> Result<()> {
+        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs, keep_rows)) {
             DispatchOut::Added(true) => Ok(()),
             _ => Err(Error::Numerical(
                 "K_SS + N_S lost positive definiteness".into(),
@@ -390,19 +480,19 @@ impl UtilityEngine {
         })
     }
 
-    /// `f_D(P)` of a walk of vertex indices.
+    /// `f_D(P)` of a walk of vertex indices. All samples are added in one blocked batch.
     pub fn utility(&self, walk: &[usize]) -> Result<f64> {
-        let Some(&s) = walk.first() else {
+        if let Some(&v) = walk.iter().find(|&&v| v >= self.building.len()) {
             return Err(Error::InvalidWalk {
                 step: 0,
-                message: "the walk is empty".into(),
+                message: format!("vertex index {v} out of range"),
             });
-        };
-        let mut st = self.start(s)?;
-        for &v in &walk[1..] {
-            st.push(v)?;
         }
-        st.utility()
+        let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
+        let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
+        let mut f = self.base.clone();
+        self.add_rows(&mut f, &obs, false)?;
+        self.utility_of(&mut f, None, &mut Vec::new())
     }
 
     /// `f_D` of many walks, in parallel.

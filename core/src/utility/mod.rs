@@ -7,6 +7,7 @@
 pub mod reference;
 
 pub use reference::{Observation, reference_utility};
+pub mod blocked;
 pub mod engine;
 pub mod simd;
 

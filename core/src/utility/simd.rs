@@ -162,8 +162,26 @@ pub fn kernel_row<const FMA: bool>(
     q: &Points,
     out: &mut [f64],
 ) {
-    let n = q.len().min(out.len());
-    let (qx, qy, qf) = (&q.x[..n], &q.y[..n], &q.floor[..n]);
+    kernel_row_from::<FMA>(sf2, inv_ell, p, q, 0, out)
+}
+
+/// [`kernel_row`] against the points of `q` from index `from` on.
+#[inline(always)]
+pub fn kernel_row_from<const FMA: bool>(
+    sf2: f64,
+    inv_ell: f64,
+    p: (f64, f64, f64),
+    q: &Points,
+    from: usize,
+    out: &mut [f64],
+) {
+    let from = from.min(q.len());
+    let n = (q.len() - from).min(out.len());
+    let (qx, qy, qf) = (
+        &q.x[from..from + n],
+        &q.y[from..from + n],
+        &q.floor[from..from + n],
+    );
     for j in 0..n {
         let dx = p.0 - qx[j];
         let dy = p.1 - qy[j];

@@ -1,0 +1,46 @@
+//! `trailprint fit`: the kernel hyperparameters of SPEC section 2.
+
+use clap::Args as ClapArgs;
+use trailprint::Result;
+use trailprint::gp::fit_kernel;
+
+use crate::opts::{BuildingOpts, json_line};
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    building: BuildingOpts,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: Args) -> Result<()> {
+    let b = a.building.load()?;
+    let fit = fit_kernel(&b.pilot)?;
+    if a.json {
+        let out = serde_json::json!({
+            "building": b.name,
+            "sf2": fit.kernel.sf2,
+            "ell": fit.kernel.ell,
+            "sn2": fit.kernel.sn2,
+            "log_likelihood": fit.log_likelihood,
+            "aps_used": fit.aps_used,
+            "locations": fit.locations,
+        });
+        println!("{}", json_line(&out)?);
+    } else {
+        println!("building        {}", b.name);
+        println!("sf2             {:.4} dB²", fit.kernel.sf2);
+        println!("ell             {:.4} m", fit.kernel.ell);
+        println!("sn2             {:.4} dB²", fit.kernel.sn2);
+        println!("log_likelihood  {:.4}", fit.log_likelihood);
+        println!(
+            "aps_used        {} ({})",
+            fit.aps_used.len(),
+            fit.aps_used.join(", ")
+        );
+        println!("locations       {}", fit.locations);
+    }
+    Ok(())
+}

@@ -1,0 +1,121 @@
+//! Options shared by several commands: the building, the kernel and the surveyor model.
+
+use std::path::PathBuf;
+
+use clap::{Args as ClapArgs, ValueEnum};
+use trailprint::building::Building;
+use trailprint::gp::{Kernel, fit_kernel};
+use trailprint::samples::SurveyorModel;
+use trailprint::{Error, Result};
+
+/// Where the building comes from.
+#[derive(ClapArgs, Debug, Clone)]
+pub struct BuildingOpts {
+    /// A `survey-building/1` JSON file.
+    #[arg(long)]
+    pub building: PathBuf,
+}
+
+impl BuildingOpts {
+    pub fn load(&self) -> Result<Building> {
+        Building::load(&self.building)
+    }
+}
+
+/// `--kernel SF2,ELL,SN2`.
+#[derive(ClapArgs, Debug, Clone, Default)]
+pub struct KernelOpts {
+    /// Kernel hyperparameters; default: the file's `kernel`, else fitted on its pilot data.
+    #[arg(long, value_name = "SF2,ELL,SN2", value_parser = parse_kernel)]
+    pub kernel: Option<Kernel>,
+}
+
+/// Parses `SF2,ELL,SN2`.
+pub fn parse_kernel(s: &str) -> std::result::Result<Kernel, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected SF2,ELL,SN2 (three numbers), got {s:?}"));
+    }
+    let mut v = [0.0; 3];
+    for (i, (p, name)) in parts.iter().zip(["SF2", "ELL", "SN2"]).enumerate() {
+        v[i] = p
+            .parse::<f64>()
+            .map_err(|_| format!("{name} is not a number: {p:?}"))?;
+    }
+    let k = Kernel::new(v[0], v[1], v[2]);
+    k.validate("--kernel").map_err(|e| e.to_string())?;
+    Ok(k)
+}
+
+impl KernelOpts {
+    /// The kernel to use for `b`, and where it came from (`option`, `file` or `fit`).
+    pub fn resolve(&self, b: &Building) -> Result<(Kernel, &'static str)> {
+        if let Some(k) = self.kernel {
+            return Ok((k, "option"));
+        }
+        if let Some(k) = b.kernel {
+            return Ok((k, "file"));
+        }
+        Ok((fit_kernel(&b.pilot)?.kernel, "fit"))
+    }
+}
+
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    Robot,
+    Human,
+}
+
+/// The surveyor model options of SPEC section 4.
+#[derive(ClapArgs, Debug, Clone)]
+pub struct ModelOpts {
+    /// Who walks: the paper's robot or a human with a step counter.
+    #[arg(long, value_enum, default_value = "robot")]
+    pub model: ModelKind,
+    /// Robot: metres between samples (speed x scan period).
+    #[arg(long, default_value_t = 0.5)]
+    pub interval: f64,
+    /// Human: walking speed, m/s.
+    #[arg(long, default_value_t = 1.2)]
+    pub speed: f64,
+    /// Human: seconds between completed Wi-Fi scans.
+    #[arg(long, default_value_t = 4.0)]
+    pub scan_interval: f64,
+    /// Human: relative step-length error.
+    #[arg(long, default_value_t = 0.05)]
+    pub step_error: f64,
+    /// Human: a turn sharper than this many degrees is a check-in.
+    #[arg(long, default_value_t = 30.0)]
+    pub turn_threshold: f64,
+}
+
+impl ModelOpts {
+    pub fn model(&self) -> Result<SurveyorModel> {
+        let m = match self.model {
+            ModelKind::Robot => SurveyorModel::Robot {
+                interval: self.interval,
+            },
+            ModelKind::Human => SurveyorModel::Human {
+                speed: self.speed,
+                scan_interval: self.scan_interval,
+                step_error: self.step_error,
+                turn_threshold_deg: self.turn_threshold,
+            },
+        };
+        m.validate()?;
+        Ok(m)
+    }
+}
+
+/// Splits a comma-separated walk.
+pub fn split_walk(s: &str) -> Vec<String> {
+    s.split(',')
+        .map(|x| x.trim().to_string())
+        .filter(|x| !x.is_empty())
+        .collect()
+}
+
+/// Serialises to one line of JSON (plain data cannot fail to serialise).
+pub fn json_line<T: serde::Serialize>(v: &T) -> Result<String> {
+    serde_json::to_string(v).map_err(|e| Error::InvalidRequest(format!("JSON output: {e}")))
+}

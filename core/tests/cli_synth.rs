@@ -1,0 +1,132 @@
+//! End-to-end: `trailprint generate`, `evaluate` and `render` as a user runs them.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn trailprint(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_trailprint"))
+        .args(args)
+        .output()
+        .expect("run trailprint")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn generate_evaluate_render() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("b.json");
+    let file_s = file.to_str().expect("utf-8 path");
+    let o = trailprint(&[
+        "generate",
+        "--out",
+        file_s,
+        "--floors",
+        "2",
+        "--rooms",
+        "2",
+        "--corridor-length",
+        "16",
+        "--aps",
+        "6",
+        "--seed",
+        "4",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b = trailprint::Building::load(&file).expect("generated file is valid");
+    assert_eq!(b.floors.len(), 2);
+
+    let walk = "f0-c02,f0-c01,f0-c00,f1-c00,f1-c01";
+    let o = trailprint(&[
+        "evaluate",
+        "--building",
+        file_s,
+        "--walk",
+        walk,
+        "--kernel",
+        "60,8,4",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("one JSON object");
+    for key in ["mean_error_m", "median_error_m", "p90_error_m"] {
+        assert!(v[key].as_f64().is_some_and(|x| x >= 0.0), "{key} in {v}");
+    }
+    assert_eq!(v["samples"], 1 + (4.0 + 8.0 + 2.0) as u64 * 2);
+    // Same seed, same answer.
+    let again = trailprint(&[
+        "evaluate",
+        "--building",
+        file_s,
+        "--walk",
+        walk,
+        "--kernel",
+        "60,8,4",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    let w: serde_json::Value = serde_json::from_str(stdout(&again).trim()).expect("json");
+    assert_eq!(v["mean_error_m"], w["mean_error_m"]);
+
+    let svg = dir.path().join("b.svg");
+    let o = trailprint(&[
+        "render",
+        "--building",
+        file_s,
+        "--walk",
+        walk,
+        "--kernel",
+        "60,8,4",
+        "-o",
+        svg.to_str().expect("utf-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&svg).expect("svg written");
+    assert_eq!(text.matches("class=\"floor\"").count(), 2);
+    assert_eq!(text.matches("<polyline").count(), 2, "one run per floor");
+    assert!(text.trim_end().ends_with("</svg>"));
+}
+
+#[test]
+fn errors_are_one_line_and_exit_1() {
+    let o = trailprint(&["generate", "--out", "-", "--floors", "0"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("error: synthetic building: floors = 0"),
+        "{}",
+        stderr(&o)
+    );
+
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/demo-building.json");
+    let o = trailprint(&[
+        "evaluate",
+        "--building",
+        demo.to_str().expect("utf-8"),
+        "--walk",
+        "f0-c00,f0-c05",
+        "--kernel",
+        "60,8,4",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("no edge between \"f0-c00\" and \"f0-c05\""),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn generate_to_stdout_is_the_demo_with_default_options() {
+    let o = trailprint(&["generate", "--out", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o) == trailprint::synth::DEMO_BUILDING_JSON);
+}
