@@ -71,6 +71,12 @@ fn main() {
         extra_noise: s.extra_noise,
     }));
     let vp = b.vertex_points();
+    if std::env::var("PROFILE_BATCH").is_ok() {
+        for _ in 0..3000 {
+            std::hint::black_box(e.utility(&walk).expect("u"));
+        }
+        return;
+    }
     time("reference whole walk", 30, || {
         std::hint::black_box(reference_utility(&k, &vp, &obs).expect("u"));
     });

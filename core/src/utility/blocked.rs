@@ -44,6 +44,45 @@ pub fn update_block<const FMA: bool>(dst: &mut [f64], coeffs: &[f64], srcs: &[&[
     }
 }
 
+/// Four destination rows at once sharing the [`BLOCK`] source rows:
+/// `d[r][j] -= sum_t c[r][t] * s[t][j]`. Each source element loaded feeds four FMAs, so
+/// the loop is bound by arithmetic, not by loads. All rows of `d` have the same length
+/// and every source is at least that long.
+#[inline(always)]
+pub fn update_block4<const FMA: bool>(
+    d: [&mut [f64]; 4],
+    c: &[[f64; BLOCK]; 4],
+    s: &[&[f64]; BLOCK],
+) {
+    let [d0, d1, d2, d3] = d;
+    let n = d0.len().min(d1.len()).min(d2.len()).min(d3.len());
+    let (d0, d1, d2, d3) = (&mut d0[..n], &mut d1[..n], &mut d2[..n], &mut d3[..n]);
+    let s: [&[f64]; BLOCK] = [
+        &s[0][..n],
+        &s[1][..n],
+        &s[2][..n],
+        &s[3][..n],
+        &s[4][..n],
+        &s[5][..n],
+        &s[6][..n],
+        &s[7][..n],
+    ];
+    for j in 0..n {
+        let (mut a0, mut a1, mut a2, mut a3) = (d0[j], d1[j], d2[j], d3[j]);
+        for t in 0..BLOCK {
+            let v = s[t][j];
+            a0 = fma::<FMA>(-c[0][t], v, a0);
+            a1 = fma::<FMA>(-c[1][t], v, a1);
+            a2 = fma::<FMA>(-c[2][t], v, a2);
+            a3 = fma::<FMA>(-c[3][t], v, a3);
+        }
+        d0[j] = a0;
+        d1[j] = a1;
+        d2[j] = a2;
+        d3[j] = a3;
+    }
+}
+
 #[inline(always)]
 fn fma<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
     if FMA { a.mul_add(b, c) } else { a * b + c }
@@ -80,7 +119,46 @@ pub fn cholesky_upper<const FMA: bool>(a: &mut [f64], n: usize) -> Option<f64> {
         // Trailing update of rows below the panel, kb rows of the panel at a time.
         let end = k0 + kb;
         let (panel, rest) = a.split_at_mut(end * n);
-        for i in end..n {
+        let mut i = end;
+        if kb == BLOCK {
+            let srcs_at = |j: usize| -> [&[f64]; BLOCK] {
+                let mut out: [&[f64]; BLOCK] = [&[]; BLOCK];
+                for (t, o) in out.iter_mut().enumerate() {
+                    *o = &panel[(k0 + t) * n + j..(k0 + t) * n + n];
+                }
+                out
+            };
+            while i + 4 <= n {
+                let mut c = [[0.0; BLOCK]; 4];
+                for (r, cr) in c.iter_mut().enumerate() {
+                    for (t, x) in cr.iter_mut().enumerate() {
+                        *x = panel[(k0 + t) * n + i + r];
+                    }
+                }
+                // The triangle in front of the common column range, row by row.
+                for r in 1..4 {
+                    let row = &mut rest[(i + r - end) * n + i + r..(i + r - end) * n + i + 3];
+                    let srcs = srcs_at(i + r);
+                    update_block::<FMA>(row, &c[r], &srcs);
+                }
+                {
+                    let row = &mut rest[(i - end) * n + i..(i - end) * n + i + 3];
+                    update_block::<FMA>(row, &c[0], &srcs_at(i));
+                }
+                let base = |r: usize| (i + r - end) * n;
+                let Ok(rows) = rest.get_disjoint_mut([
+                    base(0) + i + 3..base(0) + n,
+                    base(1) + i + 3..base(1) + n,
+                    base(2) + i + 3..base(2) + n,
+                    base(3) + i + 3..base(3) + n,
+                ]) else {
+                    break;
+                };
+                update_block4::<FMA>(rows, &c, &srcs_at(i + 3));
+                i += 4;
+            }
+        }
+        for i in i..n {
             let mut coeffs = [0.0; BLOCK];
             let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
             for (t, k) in (k0..end).enumerate() {
@@ -114,7 +192,33 @@ pub fn solve_upper_transposed<const FMA: bool>(u: &[f64], m: usize, b: &mut [f64
         }
         let end = k0 + kb;
         let (done, rest) = b.split_at_mut(end * w);
-        for i in end..m {
+        let mut i = end;
+        if kb == BLOCK {
+            let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
+            for (t, o) in srcs.iter_mut().enumerate() {
+                *o = &done[(k0 + t) * w..(k0 + t) * w + w];
+            }
+            while i + 4 <= m {
+                let mut c = [[0.0; BLOCK]; 4];
+                for (r, cr) in c.iter_mut().enumerate() {
+                    for (t, x) in cr.iter_mut().enumerate() {
+                        *x = u[(k0 + t) * m + i + r];
+                    }
+                }
+                let base = |r: usize| (i + r - end) * w;
+                let Ok(rows) = rest.get_disjoint_mut([
+                    base(0)..base(0) + w,
+                    base(1)..base(1) + w,
+                    base(2)..base(2) + w,
+                    base(3)..base(3) + w,
+                ]) else {
+                    break;
+                };
+                update_block4::<FMA>(rows, &c, &srcs);
+                i += 4;
+            }
+        }
+        for i in i..m {
             let mut coeffs = [0.0; BLOCK];
             let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
             for (t, k) in (k0..end).enumerate() {
@@ -138,7 +242,39 @@ pub fn syrk_upper_sub<const FMA: bool>(s: &mut [f64], n: usize, r: &[f64], rows:
     let mut i0 = 0;
     while i0 < rows {
         let ib = BLOCK.min(rows - i0);
-        for a in 0..n {
+        let mut a0 = 0;
+        if ib == BLOCK {
+            let srcs_at = |col: usize| -> [&[f64]; BLOCK] {
+                let mut out: [&[f64]; BLOCK] = [&[]; BLOCK];
+                for (t, o) in out.iter_mut().enumerate() {
+                    *o = &r[(i0 + t) * n + col..(i0 + t) * n + n];
+                }
+                out
+            };
+            while a0 + 4 <= n {
+                let mut c = [[0.0; BLOCK]; 4];
+                for (q, cq) in c.iter_mut().enumerate() {
+                    for (t, x) in cq.iter_mut().enumerate() {
+                        *x = r[(i0 + t) * n + a0 + q];
+                    }
+                }
+                for q in 0..3 {
+                    let row = &mut s[(a0 + q) * n + a0 + q..(a0 + q) * n + a0 + 3];
+                    update_block::<FMA>(row, &c[q], &srcs_at(a0 + q));
+                }
+                let Ok(dst) = s.get_disjoint_mut([
+                    a0 * n + a0 + 3..a0 * n + n,
+                    (a0 + 1) * n + a0 + 3..(a0 + 1) * n + n,
+                    (a0 + 2) * n + a0 + 3..(a0 + 2) * n + n,
+                    (a0 + 3) * n + a0 + 3..(a0 + 3) * n + n,
+                ]) else {
+                    break;
+                };
+                update_block4::<FMA>(dst, &c, &srcs_at(a0 + 3));
+                a0 += 4;
+            }
+        }
+        for a in a0..n {
             let mut coeffs = [0.0; BLOCK];
             let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
             for (t, i) in (i0..i0 + ib).enumerate() {
