@@ -10,8 +10,10 @@
 
 mod building;
 mod error;
+mod model;
 
 pub use building::*;
 pub use error::{Result, TrailprintError};
+pub use model::*;
 
 uniffi::setup_scaffolding!();
