@@ -73,6 +73,11 @@ pub enum Error {
     #[error("not found: {0}")]
     NotFound(String),
 
+    /// Something is already in the store under this name (for example a building, on an
+    /// import without `replace`); the app can offer to replace it.
+    #[error("already exists: {0}")]
+    AlreadyExists(String),
+
     /// The database file is not usable (not SQLite, newer schema, read-only, corrupt).
     #[error("database {path}: {message}")]
     Database { path: String, message: String },

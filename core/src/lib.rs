@@ -8,6 +8,7 @@
 //!
 //! Around the planner: synthetic buildings and their radio world ([`synth`]), the
 //! localization evaluation of SPEC section 5 ([`eval`]) and SVG drawings ([`render`]).
+//! Everything the phone keeps lives in one SQLite file ([`store`]).
 //!
 //! This crate knows nothing of FFI; `bindings/` translates its types for Kotlin.
 
@@ -17,8 +18,10 @@ pub mod eval;
 pub mod gp;
 pub mod render;
 pub mod samples;
+pub mod store;
 pub mod synth;
 pub mod utility;
 
 pub use building::Building;
 pub use error::{Error, Result};
+pub use store::Store;

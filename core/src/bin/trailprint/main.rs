@@ -1,16 +1,26 @@
 //! `trailprint`: plan Wi-Fi fingerprint survey walks from the command line.
 //!
 //! Each subcommand lives in its own `cmd_<name>.rs`; this file holds only the command
-//! enum and the dispatch. Errors print as `error: <message>` and exit with status 1.
+//! enum and the dispatch. Errors print as `error: <message>` on stderr with exit code 1;
+//! usage errors are clap's (exit code 2). Commands that touch the database take the global
+//! `--db PATH` (helpers in `store_cli.rs`).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod cmd_buildings;
+mod cmd_delete;
 mod cmd_evaluate;
+mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
+mod cmd_import;
 mod cmd_render;
 mod cmd_utility;
 mod opts;
+mod store_cli;
 
 #[derive(Parser)]
 #[command(
@@ -19,6 +29,11 @@ mod opts;
     about = "Plan informative Wi-Fi fingerprint survey walks"
 )]
 struct Cli {
+    /// Database file [default: $XDG_DATA_HOME/trailprint/trailprint.db, or
+    /// ~/.local/share/trailprint/trailprint.db, created on first use]
+    #[arg(long, global = true, value_name = "PATH")]
+    db: Option<PathBuf>,
+
     #[command(subcommand)]
     command: Command,
 }
@@ -35,19 +50,35 @@ enum Command {
     Evaluate(cmd_evaluate::Args),
     /// Draw a building, a walk and the posterior uncertainty as SVG.
     Render(cmd_render::Args),
+    /// Import a survey-building/1 file into the database.
+    Import(cmd_import::Args),
+    /// List the buildings in the database.
+    Buildings(cmd_buildings::Args),
+    /// Export a building (or its collected fingerprints) to a file.
+    Export(cmd_export::Args),
+    /// Delete a building and everything recorded for it.
+    Delete(cmd_delete::Args),
 }
 
-fn main() {
+fn main() -> ExitCode {
     let cli = Cli::parse();
+    let db = cli.db.as_deref();
     let result = match cli.command {
         Command::Fit(a) => cmd_fit::run(a),
         Command::Utility(a) => cmd_utility::run(a),
         Command::Generate(a) => cmd_generate::run(a),
         Command::Evaluate(a) => cmd_evaluate::run(a),
         Command::Render(a) => cmd_render::run(a),
+        Command::Import(a) => cmd_import::run(&a, db),
+        Command::Buildings(a) => cmd_buildings::run(&a, db),
+        Command::Export(a) => cmd_export::run(&a, db),
+        Command::Delete(a) => cmd_delete::run(&a, db),
     };
-    if let Err(e) = result {
-        eprintln!("error: {e}");
-        std::process::exit(1);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
     }
 }
