@@ -28,6 +28,9 @@ pub enum TrailprintError {
     /// The operation was cancelled through its cancel handle (nothing to show).
     #[error("{0}")]
     Cancelled(String),
+    /// A building of that name is already stored (offer to replace it).
+    #[error("{0}")]
+    AlreadyExists(String),
     /// Something looked up by id is not in the store (refresh the list).
     #[error("{0}")]
     NotFound(String),
@@ -56,6 +59,7 @@ impl From<trailprint::Error> for TrailprintError {
             E::Fit(_) => TrailprintError::Fit(msg),
             E::Cancelled => TrailprintError::Cancelled(msg),
             E::NotFound(_) => TrailprintError::NotFound(msg),
+            E::AlreadyExists(_) => TrailprintError::AlreadyExists(msg),
             E::Database { .. } => TrailprintError::Database(msg),
             E::Session { .. } => TrailprintError::Session(msg),
             E::Numerical(_) | E::Sqlite(_) => TrailprintError::Internal(msg),

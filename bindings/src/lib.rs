@@ -11,9 +11,11 @@
 mod building;
 mod error;
 mod model;
+mod store;
 
 pub use building::*;
 pub use error::{Result, TrailprintError};
 pub use model::*;
+pub use store::*;
 
 uniffi::setup_scaffolding!();

@@ -1,0 +1,51 @@
+package dev.trailprint
+
+import dev.trailprint.ffi.BuildingMap
+import dev.trailprint.ffi.BuildingSummary
+import dev.trailprint.ffi.FitSummary
+import dev.trailprint.ffi.PlanSummary
+import dev.trailprint.ffi.TrailprintStore
+import kotlinx.coroutines.CoroutineDispatcher
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.withContext
+
+/**
+ * The hand-written Kotlin face of Trailprint: suspend functions that run the (blocking)
+ * native calls on [io], and planning as a cold [Flow] of [PlanEvent]s whose cancellation
+ * cancels the native plan. Errors arrive as `TrailprintException` subclasses.
+ *
+ * One instance per database file; safe to share between view models.
+ */
+class Trailprint(
+    val store: TrailprintStore,
+    private val io: CoroutineDispatcher = Dispatchers.IO,
+) : AutoCloseable {
+    companion object {
+        /** Opens (or creates) the database at [path]. */
+        suspend fun open(path: String, io: CoroutineDispatcher = Dispatchers.IO): Trailprint =
+            withContext(io) { Trailprint(TrailprintStore.open(path), io) }
+
+        /** A database in memory (tests and previews). */
+        fun inMemory(io: CoroutineDispatcher = Dispatchers.IO): Trailprint = Trailprint(TrailprintStore.openInMemory(), io)
+    }
+
+    suspend fun importBuilding(json: String, origin: String, replace: Boolean = false): BuildingSummary =
+        withContext(io) { store.importBuildingJson(json, origin, replace) }
+
+    suspend fun importBuildingFile(path: String, replace: Boolean = false): BuildingSummary =
+        withContext(io) { store.importBuildingFile(path, replace) }
+
+    suspend fun buildings(): List<BuildingSummary> = withContext(io) { store.listBuildings() }
+
+    suspend fun map(buildingId: Long): BuildingMap = withContext(io) { store.buildingMap(buildingId) }
+
+    suspend fun deleteBuilding(buildingId: Long) = withContext(io) { store.deleteBuilding(buildingId) }
+
+    suspend fun fit(buildingId: Long): FitSummary = withContext(io) { store.fit(buildingId) }
+
+    suspend fun plans(buildingId: Long): List<PlanSummary> = withContext(io) { store.listPlans(buildingId) }
+
+    suspend fun plan(planId: Long): PlanSummary = withContext(io) { store.getPlan(planId) }
+
+    override fun close() = store.close()
+}
