@@ -9,13 +9,20 @@ use trailprint::samples::SurveyorModel;
 use crate::building::KernelParams;
 use crate::{Result, TrailprintError};
 
-/// Who walks the survey (SPEC section 4).
+/// Who walks the survey: the planner's surveyor model (SPEC section 4) plus what the
+/// session needs to follow the walk (a human's step length, a robot's speed).
 #[derive(Debug, Clone, Copy, PartialEq, uniffi::Enum)]
 pub enum SurveyorProfile {
     /// A robot labelled by SLAM: one scan every `interval_m` metres (paper: 0.5).
-    Robot { interval_m: f64 },
+    Robot {
+        interval_m: f64,
+        /// Driving speed, m/s (time estimates; default 0.5).
+        speed_mps: f64,
+    },
     /// A person with a step counter.
     Human {
+        /// Step length before the session re-estimates it at check-ins, m (default 0.7).
+        step_length_m: f64,
         /// Walking speed, m/s (default 1.2).
         speed_mps: f64,
         /// Time between completed Wi-Fi scans, s (default 4; measure it on the phone).
@@ -27,10 +34,15 @@ pub enum SurveyorProfile {
     },
 }
 
+/// Step length assumed for a plan's stored surveyor model, which does not carry one.
+const DEFAULT_STEP_LENGTH_M: f64 = 0.7;
+/// Robot speed assumed for a plan's stored surveyor model, which does not carry one.
+const DEFAULT_ROBOT_SPEED_MPS: f64 = 0.5;
+
 impl From<SurveyorProfile> for SurveyorModel {
     fn from(p: SurveyorProfile) -> Self {
         match p {
-            SurveyorProfile::Robot { interval_m } => SurveyorModel::Robot {
+            SurveyorProfile::Robot { interval_m, .. } => SurveyorModel::Robot {
                 interval: interval_m,
             },
             SurveyorProfile::Human {
@@ -38,6 +50,7 @@ impl From<SurveyorProfile> for SurveyorModel {
                 scan_interval_s,
                 step_error,
                 turn_threshold_deg,
+                ..
             } => SurveyorModel::Human {
                 speed: speed_mps,
                 scan_interval: scan_interval_s,
@@ -53,6 +66,7 @@ impl From<SurveyorModel> for SurveyorProfile {
         match m {
             SurveyorModel::Robot { interval } => SurveyorProfile::Robot {
                 interval_m: interval,
+                speed_mps: DEFAULT_ROBOT_SPEED_MPS,
             },
             SurveyorModel::Human {
                 speed,
@@ -60,6 +74,7 @@ impl From<SurveyorModel> for SurveyorProfile {
                 step_error,
                 turn_threshold_deg,
             } => SurveyorProfile::Human {
+                step_length_m: DEFAULT_STEP_LENGTH_M,
                 speed_mps: speed,
                 scan_interval_s: scan_interval,
                 step_error,
@@ -69,13 +84,13 @@ impl From<SurveyorModel> for SurveyorProfile {
     }
 }
 
-/// The human surveyor with the defaults of SPEC section 4.
+/// The human surveyor with the defaults of SPEC section 4 and a 0.7 m step.
 #[uniffi::export]
 pub fn default_human_profile() -> SurveyorProfile {
     SurveyorModel::human().into()
 }
 
-/// The paper's robot (a scan every 0.5 m).
+/// The paper's robot (a scan every 0.5 m, at 0.5 m/s).
 #[uniffi::export]
 pub fn default_robot_profile() -> SurveyorProfile {
     SurveyorModel::robot().into()

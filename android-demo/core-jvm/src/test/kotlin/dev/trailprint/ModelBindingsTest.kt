@@ -17,8 +17,8 @@ class ModelBindingsTest {
 
     @Test
     fun defaultProfilesAreTheSpecDefaults() {
-        assertEquals(SurveyorProfile.Human(1.2, 4.0, 0.05, 30.0), defaultHumanProfile())
-        assertEquals(SurveyorProfile.Robot(0.5), defaultRobotProfile())
+        assertEquals(SurveyorProfile.Human(0.7, 1.2, 4.0, 0.05, 30.0), defaultHumanProfile())
+        assertEquals(SurveyorProfile.Robot(0.5, 0.5), defaultRobotProfile())
     }
 
     @Test
@@ -50,7 +50,7 @@ class ModelBindingsTest {
     @Test
     fun aBadSurveyorModelIsAnInvalidRequestNamingTheParameter() {
         val e = assertFailsWith<TrailprintException.InvalidRequest> {
-            walkUtility(json, "demo", listOf("c00", "c01"), SurveyorProfile.Human(-1.0, 4.0, 0.05, 30.0), null)
+            walkUtility(json, "demo", listOf("c00", "c01"), SurveyorProfile.Human(0.7, -1.0, 4.0, 0.05, 30.0), null)
         }
         assertTrue("speed" in e.message!!, e.message)
     }
