@@ -94,6 +94,14 @@ impl BuildingFile {
     /// Parses JSON text; `origin` names the source in errors. Type errors carry the JSON
     /// path of the offending value (`vertices[3].x`).
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        // serde's derive would also read the struct from a JSON array; the format is an object.
+        if text.trim_start().starts_with('[') {
+            return Err(Error::Parse {
+                origin: origin.to_string(),
+                path: "$".into(),
+                message: "expected a JSON object".into(),
+            });
+        }
         let de = &mut serde_json::Deserializer::from_str(text);
         serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();

@@ -24,6 +24,7 @@ impl Point {
 /// Hyperparameters `(sf2, ell, sn2)` of `k(p, q) = sf2 * exp(-|p - q| / ell)` with
 /// observation noise `sn2`. Points on different floors are independent.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Kernel {
     /// Signal variance, dB².
     pub sf2: f64,

@@ -33,8 +33,8 @@ pub struct Args {
     json: bool,
 }
 
-pub fn run(a: Args) -> Result<()> {
-    let b = a.building.load()?;
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = a.building.load(db)?;
     let model = a.model.model()?;
     let (kernel, source) = a.kernel.resolve(&b)?;
     let walk = match &a.walk {

@@ -15,8 +15,8 @@ pub struct Args {
     json: bool,
 }
 
-pub fn run(a: Args) -> Result<()> {
-    let b = a.building.load()?;
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = a.building.load(db)?;
     let fit = fit_kernel(&b.pilot)?;
     if a.json {
         let out = serde_json::json!({

@@ -36,8 +36,8 @@ pub struct Args {
     out: PathBuf,
 }
 
-pub fn run(a: Args) -> Result<()> {
-    let b = a.building.load()?;
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = a.building.load(db)?;
     let model = a.model.model()?;
     let walk = match &a.walk {
         Some(w) => b.resolve_walk(&split_walk(w))?,

@@ -32,8 +32,8 @@ pub struct Args {
     json: bool,
 }
 
-pub fn run(a: Args) -> Result<()> {
-    let b = Arc::new(a.building.load()?);
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = Arc::new(a.building.load(db)?);
     let model = a.model.model()?;
     let (kernel, source) = a.kernel.resolve(&b)?;
     let walks: Vec<(String, Vec<String>)> = match (&a.walk, &a.walks_file) {

@@ -64,11 +64,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let db = cli.db.as_deref();
     let result = match cli.command {
-        Command::Fit(a) => cmd_fit::run(a),
-        Command::Utility(a) => cmd_utility::run(a),
+        Command::Fit(a) => cmd_fit::run(a, db),
+        Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
-        Command::Evaluate(a) => cmd_evaluate::run(a),
-        Command::Render(a) => cmd_render::run(a),
+        Command::Evaluate(a) => cmd_evaluate::run(a, db),
+        Command::Render(a) => cmd_render::run(a, db),
         Command::Import(a) => cmd_import::run(&a, db),
         Command::Buildings(a) => cmd_buildings::run(&a, db),
         Command::Export(a) => cmd_export::run(&a, db),

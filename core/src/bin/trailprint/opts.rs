@@ -1,6 +1,6 @@
 //! Options shared by several commands: the building, the kernel and the surveyor model.
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use clap::{Args as ClapArgs, ValueEnum};
 use trailprint::building::Building;
@@ -11,14 +11,15 @@ use trailprint::{Error, Result};
 /// Where the building comes from.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct BuildingOpts {
-    /// A `survey-building/1` JSON file.
-    #[arg(long)]
-    pub building: PathBuf,
+    /// A `survey-building/1` JSON file, or the name (or id) of a building in the database.
+    #[arg(long, value_name = "FILE|NAME")]
+    pub building: String,
 }
 
 impl BuildingOpts {
-    pub fn load(&self) -> Result<Building> {
-        Building::load(&self.building)
+    /// Loads the file, or the building of that name from the database `db`.
+    pub fn load(&self, db: Option<&Path>) -> Result<Building> {
+        crate::store_cli::load_building(&self.building, db)
     }
 }
 
