@@ -106,7 +106,7 @@ impl From<trailprint::store::StoredPlan> for PlanSummary {
 /// thread (the core serialises writes on one connection).
 #[derive(uniffi::Object)]
 pub struct TrailprintStore {
-    pub(crate) inner: Store,
+    pub(crate) inner: Arc<Store>,
 }
 
 impl TrailprintStore {
@@ -137,7 +137,7 @@ impl TrailprintStore {
     #[uniffi::constructor]
     pub fn open(path: String) -> Result<Arc<Self>> {
         Ok(Arc::new(TrailprintStore {
-            inner: Store::open(&path)?,
+            inner: Arc::new(Store::open(&path)?),
         }))
     }
 
@@ -145,7 +145,7 @@ impl TrailprintStore {
     #[uniffi::constructor]
     pub fn open_in_memory() -> Result<Arc<Self>> {
         Ok(Arc::new(TrailprintStore {
-            inner: Store::open_in_memory()?,
+            inner: Arc::new(Store::open_in_memory()?),
         }))
     }
 
