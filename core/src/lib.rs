@@ -16,6 +16,7 @@ pub mod building;
 pub mod error;
 pub mod eval;
 pub mod gp;
+pub mod plan;
 pub mod render;
 pub mod samples;
 pub mod store;

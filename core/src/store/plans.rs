@@ -222,3 +222,28 @@ pub(super) fn belongs(conn: &Connection, plan_id: i64, building_id: i64) -> Resu
         .optional()?
         == Some(building_id))
 }
+
+impl PlanRecord {
+    /// The record of a plan as the planner returned it.
+    pub fn from_plan(
+        req: &crate::plan::PlanRequest,
+        res: &crate::plan::PlanResult,
+        created_ms: i64,
+    ) -> Self {
+        PlanRecord {
+            start: req.start.clone(),
+            end: req.end.clone(),
+            budget_m: req.budget,
+            surveyor: serde_json::to_value(req.model).unwrap_or(serde_json::Value::Null),
+            kernel: res.kernel,
+            algorithm: res.algorithm.name().to_string(),
+            seed: Some(res.seed),
+            walk: res.walk.clone(),
+            length_m: res.length_m,
+            samples: res.samples as u64,
+            utility_nats: res.utility_nats,
+            elapsed_ms: res.elapsed_ms,
+            created_ms,
+        }
+    }
+}

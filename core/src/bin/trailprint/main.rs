@@ -17,6 +17,7 @@ mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
 mod cmd_import;
+mod cmd_plan;
 mod cmd_render;
 mod cmd_utility;
 mod opts;
@@ -58,6 +59,8 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Plan a survey walk from a start to an end vertex within a budget.
+    Plan(cmd_plan::Args),
 }
 
 fn main() -> ExitCode {
@@ -73,6 +76,7 @@ fn main() -> ExitCode {
         Command::Buildings(a) => cmd_buildings::run(&a, db),
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),
+        Command::Plan(a) => cmd_plan::run(a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,142 @@
+//! `trailprint plan`: plan a survey walk (SPEC section 7 result JSON with `--json`).
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::Args as ClapArgs;
+use trailprint::plan::{Algorithm, Params, PlanRequest, plan};
+use trailprint::store::PlanRecord;
+use trailprint::{Error, Result};
+
+use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    building: BuildingOpts,
+    /// Start vertex id.
+    #[arg(long)]
+    start: String,
+    /// End vertex id (may equal the start).
+    #[arg(long)]
+    end: String,
+    /// Budget: the longest walk allowed, metres.
+    #[arg(long)]
+    budget: f64,
+    /// auto, greedy, genetic, recursive-greedy, ero or exact.
+    #[arg(long, default_value = "auto", value_parser = parse_algorithm)]
+    algorithm: Algorithm,
+    /// Genetic: population size.
+    #[arg(long, default_value_t = 200)]
+    population: usize,
+    /// Genetic: generations.
+    #[arg(long, default_value_t = 5)]
+    generations: usize,
+    /// Genetic: tournament size.
+    #[arg(long, default_value_t = 10)]
+    tournament: usize,
+    /// Genetic: probability that an offspring is mutated.
+    #[arg(long, default_value_t = 0.9)]
+    mutation: f64,
+    /// Recursive greedy: recursion depth.
+    #[arg(long, default_value_t = 2)]
+    depth: usize,
+    /// Recursive greedy: budget step, metres (0 = automatic).
+    #[arg(long, default_value_t = 0.0)]
+    budget_step: f64,
+    /// ERO: iterations (0 = until the time limit, else 2000).
+    #[arg(long, default_value_t = 0)]
+    iterations: usize,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Stop after this many seconds with the best walk so far (auto: 2 s by default).
+    #[arg(long, value_name = "SECONDS")]
+    time_limit: Option<f64>,
+    #[command(flatten)]
+    model: ModelOpts,
+    #[command(flatten)]
+    kernel: KernelOpts,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_algorithm(s: &str) -> std::result::Result<Algorithm, String> {
+    Algorithm::from_name(s).map_err(|e| e.to_string())
+}
+
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = Arc::new(a.building.load(db)?);
+    let model = a.model.model()?;
+    let (kernel, source) = a.kernel.resolve(&b)?;
+    let time_limit = match a.time_limit {
+        None => None,
+        Some(t) if t.is_finite() && t >= 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => {
+            return Err(Error::InvalidRequest(format!(
+                "--time-limit must be a non-negative number of seconds, got {t}"
+            )));
+        }
+    };
+    let req = PlanRequest {
+        start: a.start,
+        end: a.end,
+        budget: a.budget,
+        model,
+        kernel,
+        algorithm: a.algorithm,
+        seed: a.seed,
+        time_limit,
+        params: Params {
+            population: a.population,
+            generations: a.generations,
+            tournament: a.tournament,
+            mutation: a.mutation,
+            depth: a.depth,
+            budget_step: a.budget_step,
+            iterations: a.iterations,
+        },
+    };
+    let r = plan(b.clone(), &req, &trailprint::plan::Control::new())?;
+    // A building from the database keeps its plans there; a file has nowhere to keep them.
+    let plan_id = if crate::store_cli::is_file_spec(&a.building.building) {
+        None
+    } else {
+        let store = crate::store_cli::open_store(db)?;
+        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+        let record = PlanRecord::from_plan(&req, &r, trailprint::store::now_ms());
+        Some(store.save_plan(bref, &record)?)
+    };
+    if a.json {
+        let mut v = serde_json::to_value(&r)
+            .map_err(|e| Error::InvalidRequest(format!("JSON output: {e}")))?;
+        if let (Some(id), Some(obj)) = (plan_id, v.as_object_mut()) {
+            obj.insert("plan_id".into(), id.into());
+        }
+        println!("{}", json_line(&v)?);
+    } else {
+        if let Some(id) = plan_id {
+            println!("plan id       {id}");
+        }
+        println!("building      {}", b.name);
+        println!("algorithm     {}", r.algorithm);
+        println!(
+            "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",
+            kernel.sf2, kernel.ell, kernel.sn2
+        );
+        println!("walk          {}", r.walk.join(","));
+        println!("length        {:.3} m of {} m", r.length_m, r.budget_m);
+        println!("samples       {}", r.samples);
+        println!("utility       {:.6} nats", r.utility_nats);
+        println!("elapsed       {} ms", r.elapsed_ms);
+        println!("termination   {:?}", r.termination);
+        if let Some(o) = r.optimal {
+            println!("optimal       {o}");
+        }
+        if let Some(n) = r.nodes {
+            println!("nodes         {n}");
+        }
+    }
+    Ok(())
+}

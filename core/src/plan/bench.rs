@@ -1,0 +1,1 @@
+//! Benchmark runner (see `trailprint bench`).

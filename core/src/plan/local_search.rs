@@ -1,0 +1,207 @@
+//! Local search on a walk: randomised best-of-batch improvement.
+//!
+//! Moves (all along shortest paths of the metric closure, all kept within the budget):
+//! * **detour insert**: visit a vertex between two consecutive vertices, at the position
+//!   where it costs least (or at a random position);
+//! * **segment replace** (remove + insert, a "swap"): cut the sub-walk between positions
+//!   `i < j` and go from `W[i]` to `W[j]` through another vertex instead;
+//! * **shortcut**: replace the sub-walk between `i < j` by a shortest path (frees budget
+//!   for a later insert);
+//! * **2-opt**: reverse the sub-walk `W[i..=j]`, reconnecting its ends by shortest paths
+//!   (changes the visiting order of the covered vertices).
+//!
+//! Each round draws a batch of feasible moves with the seeded generator, evaluates them in
+//! parallel, and takes the best if it improves. Evaluations share the unchanged prefix of
+//! the walk: the engine's state after every prefix is saved ([`WalkState::mark`]), so a
+//! move only pays for the samples after its first change.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::{Problem, Run};
+use crate::Result;
+use crate::utility::{Mark, WalkState};
+
+/// Local search settings.
+#[derive(Debug, Clone, Copy)]
+pub struct LocalSearch {
+    pub seed: u64,
+    /// Moves evaluated per round.
+    pub batch: usize,
+    /// Stop after this many rounds without improvement.
+    pub patience: usize,
+    /// Stop after this many rounds in all.
+    pub max_rounds: usize,
+}
+
+impl LocalSearch {
+    pub fn new(seed: u64) -> Self {
+        LocalSearch {
+            seed,
+            batch: 32,
+            patience: 12,
+            max_rounds: 10_000,
+        }
+    }
+}
+
+/// The engine state after every prefix of a walk.
+struct Prefixes<'e> {
+    full: WalkState<'e>,
+    marks: Vec<Mark>,
+}
+
+impl<'e> Prefixes<'e> {
+    fn new(p: &'e Problem, walk: &[usize]) -> Result<Self> {
+        let mut st = p.engine.start(walk[0])?;
+        let mut marks = Vec::with_capacity(walk.len());
+        marks.push(st.mark());
+        for &v in &walk[1..] {
+            st.push(v)?;
+            marks.push(st.mark());
+        }
+        Ok(Prefixes { full: st, marks })
+    }
+
+    /// Utility of `walk[..=keep]` followed by `rest`.
+    fn eval(&self, keep: usize, rest: &[usize]) -> Result<f64> {
+        let mut st = self.full.clone();
+        st.rewind(&self.marks[keep]);
+        for &v in rest {
+            st.push(v)?;
+        }
+        st.utility()
+    }
+}
+
+/// A candidate: the new walk and the index of the last unchanged vertex.
+struct Move {
+    walk: Vec<usize>,
+    keep: usize,
+}
+
+fn splice(p: &Problem, w: &[usize], i: usize, via: &[usize], j: usize) -> Vec<usize> {
+    // w[..=i] -> via... -> w[j] -> w[j+1..]
+    let mut out = w[..=i].to_vec();
+    for &v in via {
+        p.metric.extend_path(&mut out, v);
+    }
+    p.metric.extend_path(&mut out, w[j]);
+    out.extend_from_slice(&w[j + 1..]);
+    out
+}
+
+/// Draws one random move; `None` if it does not fit or changes nothing.
+fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
+    let n = p.building.len();
+    let len = w.len();
+    let kind = rng.random_range(0..100u32);
+    let new = if len < 2 || kind < 30 {
+        // Cheapest-position detour through a random vertex.
+        let v = rng.random_range(0..n);
+        let (nw, _) = super::genetic::insert_detour(p, w, p.length(w), v)?;
+        nw
+    } else if kind < 40 {
+        // Detour at a random position.
+        let v = rng.random_range(0..n);
+        let i = rng.random_range(0..len - 1);
+        splice(p, w, i, &[v], i + 1)
+    } else if kind < 75 {
+        // Replace the segment i..j by a detour through v.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(1..=8usize)).min(len - 1);
+        let v = rng.random_range(0..n);
+        splice(p, w, i, &[v], j)
+    } else if kind < 82 {
+        // Replace the segment i..j by a detour through two vertices.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(1..=12usize)).min(len - 1);
+        let a = rng.random_range(0..n);
+        let b = rng.random_range(0..n);
+        splice(p, w, i, &[a, b], j)
+    } else if kind < 85 {
+        // Shortcut.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(2..=10usize)).min(len - 1);
+        splice(p, w, i, &[], j)
+    } else {
+        // 2-opt: reverse w[i..=j], 1 <= i < j <= len - 2.
+        if len < 4 {
+            return None;
+        }
+        let i = rng.random_range(1..len - 2);
+        let j = rng.random_range(i + 1..len - 1);
+        let mut out = w[..i].to_vec();
+        p.metric.extend_path(&mut out, w[j]);
+        out.extend(w[i..j].iter().rev());
+        p.metric.extend_path(&mut out, w[j + 1]);
+        out.extend_from_slice(&w[j + 2..]);
+        out
+    };
+    if new == w || !p.fits(p.length(&new)) || p.building.check_walk(&new).is_err() {
+        return None;
+    }
+    let keep = new
+        .iter()
+        .zip(w)
+        .take_while(|(a, b)| a == b)
+        .count()
+        .saturating_sub(1);
+    Some(Move { walk: new, keep })
+}
+
+impl LocalSearch {
+    /// Improves `walk` (of utility `utility`) until no batch improves `patience` times in
+    /// a row, the round limit, or the deadline. Returns the best walk and its utility.
+    pub fn improve(
+        &self,
+        p: &Problem,
+        run: &Run,
+        walk: Vec<usize>,
+        utility: f64,
+    ) -> Result<(Vec<usize>, f64)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let (mut walk, mut utility) = (walk, utility);
+        let mut pre = Prefixes::new(p, &walk)?;
+        let mut idle = 0;
+        for _ in 0..self.max_rounds {
+            run.check()?;
+            if run.out_of_time() || idle >= self.patience {
+                break;
+            }
+            let mut moves = Vec::with_capacity(self.batch);
+            let mut tries = 0;
+            while moves.len() < self.batch && tries < self.batch * 20 {
+                tries += 1;
+                if let Some(m) = random_move(p, &walk, &mut rng) {
+                    moves.push(m);
+                }
+            }
+            if moves.is_empty() {
+                break;
+            }
+            let us: Vec<Result<f64>> = moves
+                .par_iter()
+                .map(|m| pre.eval(m.keep, &m.walk[m.keep + 1..]))
+                .collect();
+            let mut best: Option<(usize, f64)> = None;
+            for (k, u) in us.into_iter().enumerate() {
+                let u = u?;
+                if u > utility + 1e-12 && best.is_none_or(|b| u > b.1) {
+                    best = Some((k, u));
+                }
+            }
+            match best {
+                Some((k, u)) => {
+                    walk = std::mem::take(&mut moves[k].walk);
+                    utility = u;
+                    pre = Prefixes::new(p, &walk)?;
+                    idle = 0;
+                }
+                None => idle += 1,
+            }
+        }
+        Ok((walk, utility))
+    }
+}

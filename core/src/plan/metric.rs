@@ -1,0 +1,180 @@
+//! The metric closure of a building: all-pairs shortest path lengths and the paths.
+//!
+//! Steiner TSP paths and all the planners work on this closure: a "jump" from `u` to `v`
+//! stands for the shortest walk between them, expanded by [`Metric::path`].
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use rayon::prelude::*;
+
+use crate::building::Building;
+
+/// All-pairs shortest paths.
+///
+/// `dist[u * n + v]` is the length of a shortest walk from `u` to `v`; `next[u * n + v]`
+/// is the neighbour of `u` on one (ties broken by the lower vertex index, so paths are
+/// deterministic).
+///
+/// # Complexity
+/// `O(n (m + n) log n)` time (one Dijkstra per vertex, in parallel), `O(n^2)` memory:
+/// 12 bytes per pair, 48 MB for 2,000 vertices.
+#[derive(Debug, Clone)]
+pub struct Metric {
+    n: usize,
+    dist: Vec<f64>,
+    next: Vec<u32>,
+}
+
+#[derive(PartialEq)]
+struct Item(f64, usize);
+
+impl Eq for Item {}
+
+impl Ord for Item {
+    fn cmp(&self, o: &Self) -> Ordering {
+        // Min-heap on distance, then on vertex index.
+        o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
+    }
+}
+
+impl PartialOrd for Item {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl Metric {
+    /// Computes the closure of `b`.
+    pub fn new(b: &Building) -> Self {
+        let n = b.len();
+        // Dijkstra from each target t: parent[u] on the tree rooted at t is u's next hop
+        // towards t, so each run fills column t of `next`.
+        let cols: Vec<(Vec<f64>, Vec<u32>)> = (0..n)
+            .into_par_iter()
+            .map(|t| {
+                let mut d = vec![f64::INFINITY; n];
+                let mut parent = vec![u32::MAX; n];
+                let mut heap = BinaryHeap::new();
+                d[t] = 0.0;
+                parent[t] = t as u32;
+                heap.push(Item(0.0, t));
+                while let Some(Item(du, u)) = heap.pop() {
+                    if du > d[u] {
+                        continue;
+                    }
+                    for &(w, e) in b.neighbours(u) {
+                        let nd = du + b.edges[e].length;
+                        if nd < d[w] || (nd == d[w] && (u as u32) < parent[w]) {
+                            let improved = nd < d[w];
+                            d[w] = nd;
+                            parent[w] = u as u32;
+                            if improved {
+                                heap.push(Item(nd, w));
+                            }
+                        }
+                    }
+                }
+                (d, parent)
+            })
+            .collect();
+        let mut dist = vec![f64::INFINITY; n * n];
+        let mut next = vec![u32::MAX; n * n];
+        for (t, (d, p)) in cols.into_iter().enumerate() {
+            for u in 0..n {
+                dist[u * n + t] = d[u];
+                next[u * n + t] = p[u];
+            }
+        }
+        Metric { n, dist, next }
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether the building has no vertex (never, for a validated building).
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Shortest distance from `u` to `v`, metres.
+    #[inline]
+    pub fn dist(&self, u: usize, v: usize) -> f64 {
+        self.dist[u * self.n + v]
+    }
+
+    /// The neighbour of `u` on the shortest path to `v` (`u` itself when `u == v`).
+    #[inline]
+    pub fn next_hop(&self, u: usize, v: usize) -> usize {
+        self.next[u * self.n + v] as usize
+    }
+
+    /// The shortest walk from `u` to `v`, both included.
+    pub fn path(&self, u: usize, v: usize) -> Vec<usize> {
+        let mut out = vec![u];
+        self.extend_path(&mut out, v);
+        out
+    }
+
+    /// Appends the shortest walk from `walk.last()` to `v`, without repeating the last
+    /// vertex. Does nothing on an empty walk.
+    pub fn extend_path(&self, walk: &mut Vec<usize>, v: usize) {
+        let Some(&mut mut u) = walk.last_mut() else {
+            return;
+        };
+        let mut guard = 0;
+        while u != v && guard <= self.n {
+            let h = self.next_hop(u, v);
+            if h >= self.n {
+                return; // unreachable; a validated building is connected
+            }
+            walk.push(h);
+            u = h;
+            guard += 1;
+        }
+    }
+
+    /// The walk `s -> order[0] -> ... -> t` along shortest paths.
+    pub fn expand(&self, s: usize, order: &[usize], t: usize) -> Vec<usize> {
+        let mut w = vec![s];
+        for &v in order {
+            self.extend_path(&mut w, v);
+        }
+        self.extend_path(&mut w, t);
+        w
+    }
+
+    /// Length of `s -> order -> t` in the closure.
+    pub fn tour_cost(&self, s: usize, order: &[usize], t: usize) -> f64 {
+        let mut c = 0.0;
+        let mut u = s;
+        for &v in order {
+            c += self.dist(u, v);
+            u = v;
+        }
+        c + self.dist(u, t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shortest_paths_on_a_square_with_a_long_edge() {
+        // a-b 1, b-c 1, c-d 1, a-d length 5 (longer than a-b-c-d).
+        let text = r#"{"format":"survey-building/1","name":"sq",
+          "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":1,"y":0},{"id":"c","x":1,"y":1},{"id":"d","x":0,"y":1}],
+          "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"},{"a":"c","b":"d"},{"a":"a","b":"d","length":5}]}"#;
+        let b = Building::from_json(text, "sq").expect("valid");
+        let m = Metric::new(&b);
+        assert_eq!(m.dist(0, 3), 3.0);
+        assert_eq!(m.path(0, 3), vec![0, 1, 2, 3]);
+        assert_eq!(m.path(3, 0), vec![3, 2, 1, 0]);
+        assert_eq!(m.path(2, 2), vec![2]);
+        assert_eq!(m.expand(0, &[2], 0), vec![0, 1, 2, 1, 0]);
+        assert_eq!(m.tour_cost(0, &[2], 0), 4.0);
+    }
+}

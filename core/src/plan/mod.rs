@@ -1,0 +1,721 @@
+//! Planners: walks from `v_s` to `v_t` within a budget that maximise the utility `f_D(P)`
+//! of SPEC section 3.
+//!
+//! # Layout (argmin style)
+//! * The **problem** ([`Problem`]) holds the building, the fast [`UtilityEngine`], the
+//!   metric closure ([`metric::Metric`]) and the request's start, end and budget.
+//! * Each **solver** is a type implementing [`Solver`] in its own file: [`greedy`] (the
+//!   paper's Algorithm 1), [`genetic`] (paper IV-B), [`recursive_greedy`] (Chekuri and Pal),
+//!   [`ero`] (edge-based random orienteering), [`exact`] (branch and bound) and [`auto`]
+//!   (ours, the default).
+//! * The **run state** ([`Run`]) carries the caller's [`Control`] (cancel token, progress
+//!   observer), the deadline from the time limit and the seeded random generator is
+//!   created by each solver from [`PlanRequest::seed`] (`ChaCha8Rng::seed_from_u64`).
+//! * **Termination** is an enum ([`Termination`]): completed, proved optimal, time limit.
+//!   Cancellation is not a termination but the error [`Error::Cancelled`]: a cancelled
+//!   plan returns no walk.
+//!
+//! Every returned walk follows real edges, starts at `v_s`, ends at `v_t` and satisfies
+//! `C(P) <= B + 1e-9`; [`plan`] checks this before returning.
+
+pub mod auto;
+pub mod bench;
+pub mod ero;
+pub mod exact;
+pub mod genetic;
+pub mod greedy;
+pub mod local_search;
+pub mod metric;
+pub mod recursive_greedy;
+pub mod steiner;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use crate::building::Building;
+use crate::gp::Kernel;
+use crate::samples::{SurveyorModel, sample_walk};
+use crate::utility::UtilityEngine;
+use crate::{Error, Result};
+
+pub use metric::Metric;
+
+/// Feasibility tolerance of SPEC section 3: a walk fits when `C(P) <= B + BUDGET_EPS`.
+pub const BUDGET_EPS: f64 = 1e-9;
+
+/// The planning algorithms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Algorithm {
+    /// Ours: greedy, then a genetic search seeded with it, then local search, and an
+    /// exact search when the instance is small enough (see [`auto`]).
+    #[default]
+    Auto,
+    /// The paper's Algorithm 1 (ratio greedy over Steiner TSP paths).
+    Greedy,
+    /// The paper's genetic algorithm (section IV-B).
+    Genetic,
+    /// Chekuri and Pal's recursive greedy (depth [`Params::depth`]).
+    RecursiveGreedy,
+    /// Edge-based random orienteering.
+    Ero,
+    /// Branch and bound; proves optimality when it finishes.
+    Exact,
+}
+
+impl Algorithm {
+    /// All algorithms, in the order the benchmark lists them.
+    pub const ALL: [Algorithm; 6] = [
+        Algorithm::Greedy,
+        Algorithm::Genetic,
+        Algorithm::RecursiveGreedy,
+        Algorithm::Ero,
+        Algorithm::Exact,
+        Algorithm::Auto,
+    ];
+
+    /// The name used on the command line and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::Auto => "auto",
+            Algorithm::Greedy => "greedy",
+            Algorithm::Genetic => "genetic",
+            Algorithm::RecursiveGreedy => "recursive-greedy",
+            Algorithm::Ero => "ero",
+            Algorithm::Exact => "exact",
+        }
+    }
+
+    /// Parses a name as written by [`name`](Self::name).
+    pub fn from_name(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| {
+                Error::InvalidRequest(format!(
+                    "unknown algorithm {s:?}, expected one of auto, greedy, genetic, recursive-greedy, ero, exact"
+                ))
+            })
+    }
+
+    /// Default time limit when the request gives none: 2 s for `auto`, none otherwise.
+    pub fn default_time_limit(self) -> Option<Duration> {
+        match self {
+            Algorithm::Auto => Some(Duration::from_secs(2)),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Algorithm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Tuning parameters; each algorithm reads the ones it needs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Params {
+    /// Genetic: population size (paper: 100 and 200).
+    pub population: usize,
+    /// Genetic: number of generations (paper: 5).
+    pub generations: usize,
+    /// Genetic: tournament size (paper: 10).
+    pub tournament: usize,
+    /// Genetic: probability that an offspring is mutated (paper: 0.9).
+    pub mutation: f64,
+    /// Recursive greedy: recursion depth `I` (default 2).
+    pub depth: usize,
+    /// Recursive greedy: budget discretisation step in metres (0 = automatic, `B / 12`
+    /// rounded up to a multiple of the sample spacing).
+    pub budget_step: f64,
+    /// ERO: number of iterations (0 = until the time limit, or 2,000 without one).
+    pub iterations: usize,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            population: 200,
+            generations: 5,
+            tournament: 10,
+            mutation: 0.9,
+            depth: 2,
+            budget_step: 0.0,
+            iterations: 0,
+        }
+    }
+}
+
+/// `Option<Duration>` as fractional seconds in JSON.
+mod opt_secs {
+    use std::time::Duration;
+
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
+        match d {
+            Some(d) => s.serialize_some(&d.as_secs_f64()),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Duration>, D::Error> {
+        let v: Option<f64> = Option::deserialize(d)?;
+        match v {
+            None => Ok(None),
+            Some(x) if x.is_finite() && x >= 0.0 => Ok(Some(Duration::from_secs_f64(x))),
+            Some(x) => Err(serde::de::Error::custom(format!(
+                "time_limit must be a non-negative number of seconds, got {x}"
+            ))),
+        }
+    }
+}
+
+/// What to plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanRequest {
+    /// Start vertex id `v_s`.
+    pub start: String,
+    /// End vertex id `v_t` (may equal the start: a closed walk).
+    pub end: String,
+    /// Budget `B`, metres.
+    pub budget: f64,
+    /// Who walks.
+    #[serde(default)]
+    pub model: SurveyorModel,
+    /// Kernel hyperparameters.
+    pub kernel: Kernel,
+    #[serde(default)]
+    pub algorithm: Algorithm,
+    /// Seed of every random choice.
+    #[serde(default)]
+    pub seed: u64,
+    /// Stop with the best walk so far after this long (`auto`: 2 s when `None`).
+    #[serde(default, with = "opt_secs")]
+    pub time_limit: Option<Duration>,
+    #[serde(default)]
+    pub params: Params,
+}
+
+impl PlanRequest {
+    /// A request with default algorithm (`auto`), robot model, seed 0 and default parameters.
+    pub fn new(start: &str, end: &str, budget: f64, kernel: Kernel) -> Self {
+        PlanRequest {
+            start: start.to_string(),
+            end: end.to_string(),
+            budget,
+            model: SurveyorModel::default(),
+            kernel,
+            algorithm: Algorithm::default(),
+            seed: 0,
+            time_limit: None,
+            params: Params::default(),
+        }
+    }
+
+    /// The time limit in effect (the request's, else the algorithm's default).
+    pub fn effective_time_limit(&self) -> Option<Duration> {
+        self.time_limit
+            .or_else(|| self.algorithm.default_time_limit())
+    }
+}
+
+/// Why a planner stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The algorithm ran to its natural end.
+    Completed,
+    /// The exact search finished: the walk is optimal.
+    Optimal,
+    /// The time limit was reached; the walk is the best found so far.
+    TimeLimit,
+}
+
+/// The outcome of a plan, in the JSON shape of SPEC section 7 (plus `optimal`, `nodes`
+/// for the exact search and `termination`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanResult {
+    pub algorithm: Algorithm,
+    /// Vertex ids of the walk.
+    pub walk: Vec<String>,
+    /// Vertex indices of the walk (not serialised: indices never leave the process).
+    #[serde(skip)]
+    pub walk_indices: Vec<usize>,
+    pub length_m: f64,
+    pub budget_m: f64,
+    pub samples: usize,
+    pub utility_nats: f64,
+    pub elapsed_ms: u64,
+    pub seed: u64,
+    pub kernel: Kernel,
+    /// Exact search: whether the walk is proved optimal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimal: Option<bool>,
+    /// Exact search: number of search nodes explored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nodes: Option<u64>,
+    pub termination: Termination,
+}
+
+/// A progress report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Progress {
+    /// The algorithm reporting (for `auto`, the phase's algorithm).
+    pub algorithm: Algorithm,
+    /// Estimated fraction of the work done, in `[0, 1]` (a time fraction under a limit).
+    pub fraction: f64,
+    /// Utility of the best walk so far, nats, if there is one.
+    pub best_utility: Option<f64>,
+    /// A short human-readable note (`generation 3/5`, `1234 nodes`).
+    pub message: String,
+}
+
+/// Receives progress reports; called from the planning thread (or a rayon worker), so it
+/// must be cheap and thread-safe.
+pub trait Observer: Send + Sync {
+    fn progress(&self, p: &Progress);
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoObserver;
+
+impl Observer for NoObserver {
+    fn progress(&self, _: &Progress) {}
+}
+
+/// How the caller steers a running plan: a cancel token another thread may set, and an
+/// optional progress observer.
+#[derive(Clone, Default)]
+pub struct Control {
+    cancel: Arc<AtomicBool>,
+    observer: Option<Arc<dyn Observer>>,
+}
+
+impl std::fmt::Debug for Control {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Control")
+            .field("cancelled", &self.is_cancelled())
+            .field("observer", &self.observer.is_some())
+            .finish()
+    }
+}
+
+impl Control {
+    /// No observer, a fresh cancel token.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Uses `token` as the cancel token (set it to `true` to cancel).
+    pub fn with_cancel_token(mut self, token: Arc<AtomicBool>) -> Self {
+        self.cancel = token;
+        self
+    }
+
+    /// Sends progress reports to `observer`.
+    pub fn with_observer(mut self, observer: Arc<dyn Observer>) -> Self {
+        self.observer = Some(observer);
+        self
+    }
+
+    /// The cancel token, to hand to another thread.
+    pub fn cancel_token(&self) -> Arc<AtomicBool> {
+        self.cancel.clone()
+    }
+
+    /// Asks the running plan to stop; it returns [`Error::Cancelled`] promptly.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether cancellation was requested.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+}
+
+/// The run state shared by a solver's threads: control, start time and deadline.
+#[derive(Debug, Clone)]
+pub struct Run {
+    control: Control,
+    started: Instant,
+    deadline: Option<Instant>,
+}
+
+impl Run {
+    /// Starts the clock now.
+    pub fn new(control: Control, time_limit: Option<Duration>) -> Self {
+        let started = Instant::now();
+        Run {
+            control,
+            started,
+            deadline: time_limit.map(|t| started + t),
+        }
+    }
+
+    /// The same control with an earlier deadline (for a phase of `auto`).
+    pub fn with_deadline(&self, deadline: Option<Instant>) -> Self {
+        let deadline = match (self.deadline, deadline) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        Run {
+            control: self.control.clone(),
+            started: self.started,
+            deadline,
+        }
+    }
+
+    /// `Err(Cancelled)` if the caller cancelled.
+    pub fn check(&self) -> Result<()> {
+        if self.control.is_cancelled() {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Whether the deadline has passed.
+    pub fn out_of_time(&self) -> bool {
+        self.deadline.is_some_and(|d| Instant::now() >= d)
+    }
+
+    /// Whether to stop now (cancelled or out of time).
+    pub fn should_stop(&self) -> bool {
+        self.control.is_cancelled() || self.out_of_time()
+    }
+
+    /// The deadline, if any.
+    pub fn deadline(&self) -> Option<Instant> {
+        self.deadline
+    }
+
+    /// Time since the start.
+    pub fn elapsed(&self) -> Duration {
+        self.started.elapsed()
+    }
+
+    /// Fraction of the time limit used, if there is one.
+    pub fn time_fraction(&self) -> Option<f64> {
+        self.deadline.map(|d| {
+            let total = d.saturating_duration_since(self.started).as_secs_f64();
+            if total <= 0.0 {
+                1.0
+            } else {
+                (self.started.elapsed().as_secs_f64() / total).min(1.0)
+            }
+        })
+    }
+
+    /// Sends a progress report to the observer, if any.
+    pub fn report(&self, algorithm: Algorithm, fraction: f64, best: Option<f64>, msg: String) {
+        if let Some(o) = &self.control.observer {
+            o.progress(&Progress {
+                algorithm,
+                fraction: fraction.clamp(0.0, 1.0),
+                best_utility: best,
+                message: msg,
+            });
+        }
+    }
+}
+
+/// One planning instance: the building with its engine and metric closure, and the
+/// request's end points and budget (as indices).
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub building: Arc<Building>,
+    pub engine: UtilityEngine,
+    pub metric: Arc<Metric>,
+    pub start: usize,
+    pub end: usize,
+    pub budget: f64,
+}
+
+impl Problem {
+    /// Builds the engine (conditioned on the pilot data) and the metric closure.
+    pub fn new(
+        building: Arc<Building>,
+        kernel: Kernel,
+        model: SurveyorModel,
+        start: usize,
+        end: usize,
+        budget: f64,
+    ) -> Result<Self> {
+        let engine = UtilityEngine::new(building.clone(), kernel, model)?;
+        let metric = Arc::new(Metric::new(&building));
+        Ok(Problem {
+            building,
+            engine,
+            metric,
+            start,
+            end,
+            budget,
+        })
+    }
+
+    /// Same building, engine and metric, other end points or budget.
+    pub fn with_ends(&self, start: usize, end: usize, budget: f64) -> Self {
+        Problem {
+            start,
+            end,
+            budget,
+            ..self.clone()
+        }
+    }
+
+    /// Whether a length fits the budget.
+    pub fn fits(&self, length: f64) -> bool {
+        length <= self.budget + BUDGET_EPS
+    }
+
+    /// `C(P)` of a walk of adjacent vertices.
+    pub fn length(&self, walk: &[usize]) -> f64 {
+        self.building.walk_length(walk)
+    }
+
+    /// `f_D(P)`.
+    pub fn utility(&self, walk: &[usize]) -> Result<f64> {
+        self.engine.utility(walk)
+    }
+
+    /// `f_D` of many walks in parallel.
+    pub fn utilities(&self, walks: &[Vec<usize>]) -> Result<Vec<f64>> {
+        self.engine.utilities(walks).into_iter().collect()
+    }
+
+    /// The shortest walk from start to end.
+    pub fn shortest_walk(&self) -> Vec<usize> {
+        self.metric.path(self.start, self.end)
+    }
+
+    /// Whether `walk` is a feasible answer: real edges, right ends, within budget.
+    pub fn check(&self, walk: &[usize]) -> Result<()> {
+        self.building.check_walk(walk)?;
+        let bad = |m: String| {
+            Err(Error::InvalidWalk {
+                step: 0,
+                message: m,
+            })
+        };
+        match (walk.first(), walk.last()) {
+            (Some(&a), Some(&b)) if a == self.start && b == self.end => {}
+            _ => return bad("the walk does not run from the start to the end".into()),
+        }
+        let len = self.length(walk);
+        if !self.fits(len) {
+            return bad(format!(
+                "the walk is {len} m long, over the budget of {} m",
+                self.budget
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A solver's answer before it is dressed as a [`PlanResult`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    pub walk: Vec<usize>,
+    pub utility: f64,
+    pub termination: Termination,
+    pub optimal: Option<bool>,
+    pub nodes: Option<u64>,
+}
+
+impl Outcome {
+    /// A heuristic's answer.
+    pub fn new(walk: Vec<usize>, utility: f64, termination: Termination) -> Self {
+        Outcome {
+            walk,
+            utility,
+            termination,
+            optimal: None,
+            nodes: None,
+        }
+    }
+}
+
+/// A planning algorithm.
+pub trait Solver {
+    /// Which algorithm this is.
+    fn algorithm(&self) -> Algorithm;
+
+    /// Plans on `problem`. Returns the best walk found; [`Error::Cancelled`] if `run` was
+    /// cancelled.
+    fn solve(&self, problem: &Problem, run: &Run) -> Result<Outcome>;
+}
+
+/// The solver for a request's algorithm, seed and parameters.
+pub fn solver_for(
+    algorithm: Algorithm,
+    seed: u64,
+    params: &Params,
+) -> Box<dyn Solver + Send + Sync> {
+    match algorithm {
+        Algorithm::Greedy => Box::new(greedy::Greedy::paper()),
+        Algorithm::Genetic => Box::new(genetic::Genetic::new(*params, seed)),
+        Algorithm::RecursiveGreedy => Box::new(recursive_greedy::RecursiveGreedy::new(
+            params.depth,
+            params.budget_step,
+        )),
+        Algorithm::Ero => Box::new(ero::Ero::new(params.iterations, seed)),
+        Algorithm::Exact => Box::new(exact::Exact::new()),
+        Algorithm::Auto => Box::new(auto::Auto::new(*params, seed)),
+    }
+}
+
+/// Checks a request against a building and resolves its end points.
+///
+/// # Errors
+/// One clear [`Error`] per problem: an unknown vertex ([`Error::InvalidRequest`] naming
+/// it), a budget that is not a positive finite number, invalid kernel or model or
+/// parameters, or an end that cannot be reached within the budget ([`Error::Unreachable`]
+/// with the shortest distance).
+pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)> {
+    let start = building
+        .require_vertex(&req.start)
+        .map_err(|e| Error::InvalidRequest(format!("start: {e}")))?;
+    let end = building
+        .require_vertex(&req.end)
+        .map_err(|e| Error::InvalidRequest(format!("end: {e}")))?;
+    if !req.budget.is_finite() || req.budget <= 0.0 {
+        return Err(Error::InvalidRequest(format!(
+            "budget must be a positive finite number of metres, got {}",
+            req.budget
+        )));
+    }
+    req.kernel.validate("kernel")?;
+    req.model.validate()?;
+    let p = &req.params;
+    let bad = |m: String| Err(Error::InvalidRequest(m));
+    if p.population < 2 {
+        return bad(format!(
+            "population must be at least 2, got {}",
+            p.population
+        ));
+    }
+    if p.tournament < 1 {
+        return bad(format!(
+            "tournament must be at least 1, got {}",
+            p.tournament
+        ));
+    }
+    if !(0.0..=1.0).contains(&p.mutation) {
+        return bad(format!(
+            "mutation must be a probability in [0, 1], got {}",
+            p.mutation
+        ));
+    }
+    if p.depth > 5 {
+        return bad(format!("depth must be at most 5, got {}", p.depth));
+    }
+    if !p.budget_step.is_finite() || p.budget_step < 0.0 {
+        return bad(format!(
+            "budget step must be a non-negative number of metres, got {}",
+            p.budget_step
+        ));
+    }
+    Ok((start, end))
+}
+
+/// Plans a walk.
+///
+/// # Arguments
+/// * `building` - the building (shared with the engine).
+/// * `req` - start, end, budget, model, kernel, algorithm, seed, time limit, parameters.
+/// * `control` - cancel token and progress observer.
+///
+/// # Returns
+/// The walk and its figures. With a time limit the best walk found so far is returned
+/// when the limit is reached (`termination: time_limit`).
+///
+/// # Errors
+/// See [`validate`]; [`Error::Cancelled`] when cancelled through `control`.
+pub fn plan(building: Arc<Building>, req: &PlanRequest, control: &Control) -> Result<PlanResult> {
+    plan_with_prior(building, req, &[], control)
+}
+
+/// Plans a walk whose utility is conditioned on the pilot data plus `prior`
+/// observations: samples already collected (replanning a survey in progress) or the walks
+/// of other surveyors (team planning). The utility reported is then the information the
+/// walk adds on top of all of them, `f_{D + prior}(P)`.
+pub fn plan_with_prior(
+    building: Arc<Building>,
+    req: &PlanRequest,
+    prior: &[crate::utility::Observation],
+    control: &Control,
+) -> Result<PlanResult> {
+    let (start, end) = validate(&building, req)?;
+    let run = Run::new(control.clone(), req.effective_time_limit());
+    let metric = Arc::new(Metric::new(&building));
+    let shortest = metric.dist(start, end);
+    if !shortest.is_finite() || shortest > req.budget + BUDGET_EPS {
+        return Err(Error::Unreachable {
+            start: req.start.clone(),
+            end: req.end.clone(),
+            budget: req.budget,
+            shortest,
+        });
+    }
+    let engine = UtilityEngine::with_prior(building.clone(), req.kernel, req.model, prior)?;
+    let problem = Problem {
+        building: building.clone(),
+        engine,
+        metric,
+        start,
+        end,
+        budget: req.budget,
+    };
+    let solver = solver_for(req.algorithm, req.seed, &req.params);
+    let out = solver.solve(&problem, &run)?;
+    run.check()?;
+    finish(&problem, req, out, &run)
+}
+
+/// Checks an outcome and dresses it as a result.
+fn finish(problem: &Problem, req: &PlanRequest, out: Outcome, run: &Run) -> Result<PlanResult> {
+    problem.check(&out.walk).map_err(|e| {
+        Error::Numerical(format!(
+            "internal error: {} returned an infeasible walk: {e}",
+            req.algorithm
+        ))
+    })?;
+    let b = &problem.building;
+    let samples = sample_walk(b, &out.walk, &req.model, &req.kernel)?.len();
+    Ok(PlanResult {
+        algorithm: req.algorithm,
+        walk: b.walk_ids(&out.walk),
+        length_m: problem.length(&out.walk),
+        budget_m: req.budget,
+        samples,
+        utility_nats: out.utility,
+        elapsed_ms: run.elapsed().as_millis() as u64,
+        seed: req.seed,
+        kernel: req.kernel,
+        optimal: out.optimal,
+        nodes: out.nodes,
+        termination: out.termination,
+        walk_indices: out.walk,
+    })
+}
+
+/// Keeps the better of two (walk, utility) pairs; ties go to the shorter, then the
+/// lexicographically smaller walk, so that parallel searches stay deterministic.
+pub(crate) fn better(a: (&[usize], f64), b: (&[usize], f64)) -> bool {
+    // true if a is better than b
+    if a.1 != b.1 {
+        return a.1 > b.1;
+    }
+    if a.0.len() != b.0.len() {
+        return a.0.len() < b.0.len();
+    }
+    a.0 < b.0
+}

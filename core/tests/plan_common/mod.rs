@@ -1,0 +1,113 @@
+//! Shared helpers of the planner tests.
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use trailprint::Building;
+use trailprint::gp::Kernel;
+use trailprint::plan::{Algorithm, PlanRequest, Problem};
+use trailprint::samples::SurveyorModel;
+
+pub fn instance(name: &str) -> Arc<Building> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/instances")
+        .join(name);
+    Arc::new(Building::load(&path).expect("shared instance"))
+}
+
+/// A `w x h` grid with `step` m edges, minus the edges in `drop` (by index in row-major
+/// edge order, skipped if that would disconnect the grid), with a few pilot points.
+pub fn grid(w: usize, h: usize, step: f64, drop: &[usize]) -> Arc<Building> {
+    let mut vs = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            vs.push(format!(
+                r#"{{"id":"v{x}_{y}","x":{},"y":{}}}"#,
+                x as f64 * step,
+                y as f64 * step
+            ));
+        }
+    }
+    let mut es: Vec<(String, String)> = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            if x + 1 < w {
+                es.push((format!("v{x}_{y}"), format!("v{}_{y}", x + 1)));
+            }
+            if y + 1 < h {
+                es.push((format!("v{x}_{y}"), format!("v{x}_{}", y + 1)));
+            }
+        }
+    }
+    let build = |es: &[(String, String)]| {
+        let edges: Vec<String> = es
+            .iter()
+            .map(|(a, b)| format!(r#"{{"a":"{a}","b":"{b}"}}"#))
+            .collect();
+        let text = format!(
+            r#"{{"format":"survey-building/1","name":"grid","vertices":[{}],"edges":[{}],
+               "pilot":[{{"x":0.3,"y":0.1,"rss":{{"a":-50}}}},{{"x":{},"y":{},"rss":{{"a":-60}}}}]}}"#,
+            vs.join(","),
+            edges.join(","),
+            (w - 1) as f64 * step * 0.6,
+            (h - 1) as f64 * step * 0.7
+        );
+        Building::from_json(&text, "grid")
+    };
+    let mut kept = es.clone();
+    for &d in drop {
+        if kept.len() <= 1 {
+            break;
+        }
+        let i = d % kept.len();
+        let mut trial = kept.clone();
+        trial.remove(i);
+        if build(&trial).is_ok() {
+            kept = trial;
+        }
+    }
+    Arc::new(build(&kept).expect("grid"))
+}
+
+pub fn kernel() -> Kernel {
+    Kernel::new(60.0, 6.0, 4.0)
+}
+
+pub fn request(b: &Building, s: usize, t: usize, budget: f64, alg: Algorithm) -> PlanRequest {
+    let mut r = PlanRequest::new(&b.vertices[s].id, &b.vertices[t].id, budget, kernel());
+    r.algorithm = alg;
+    r.seed = 7;
+    r.params.population = 30;
+    r.params.generations = 3;
+    r.params.iterations = 150;
+    r.time_limit = Some(std::time::Duration::from_secs(20));
+    r
+}
+
+pub fn problem(b: &Arc<Building>, s: usize, t: usize, budget: f64) -> Problem {
+    Problem::new(b.clone(), kernel(), SurveyorModel::robot(), s, t, budget).expect("problem")
+}
+
+/// Plain enumeration: the best utility over every walk from `s` to `t` within budget.
+pub fn brute_force(p: &Problem) -> (f64, Vec<usize>) {
+    fn rec(p: &Problem, walk: &mut Vec<usize>, len: f64, best: &mut (f64, Vec<usize>)) {
+        let v = *walk.last().expect("non-empty");
+        if v == p.end {
+            let u = p.utility(walk).expect("utility");
+            if u > best.0 {
+                *best = (u, walk.clone());
+            }
+        }
+        for &(w, e) in p.building.neighbours(v) {
+            let l = len + p.building.edges[e].length;
+            if l <= p.budget + 1e-9 {
+                walk.push(w);
+                rec(p, walk, l, best);
+                walk.pop();
+            }
+        }
+    }
+    let mut best = (f64::NEG_INFINITY, Vec::new());
+    rec(p, &mut vec![p.start], 0.0, &mut best);
+    best
+}

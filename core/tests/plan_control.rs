@@ -1,0 +1,188 @@
+//! Cancellation, progress, determinism and request validation.
+
+mod plan_common;
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use plan_common::{grid, instance, kernel, request};
+use trailprint::Error;
+use trailprint::plan::{Algorithm, Control, Observer, PlanRequest, Progress, Termination, plan};
+
+#[derive(Default)]
+struct Count {
+    calls: AtomicUsize,
+    last: Mutex<Option<Progress>>,
+}
+
+impl Observer for Count {
+    fn progress(&self, p: &Progress) {
+        self.calls.fetch_add(1, Ordering::Relaxed);
+        assert!((0.0..=1.0).contains(&p.fraction));
+        if let Ok(mut l) = self.last.lock() {
+            *l = Some(p.clone());
+        }
+    }
+}
+
+#[test]
+fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
+    let b = instance("area-two.json");
+    let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
+    req.algorithm = Algorithm::Exact; // hours without a limit
+    let token = Arc::new(AtomicBool::new(false));
+    let control = Control::new().with_cancel_token(token.clone());
+    let t2 = token.clone();
+    let h = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        t2.store(true, Ordering::Relaxed);
+        Instant::now()
+    });
+    let r = plan(b, &req, &control);
+    let stopped = Instant::now();
+    let cancelled_at = h.join().expect("thread");
+    assert!(matches!(r, Err(Error::Cancelled)), "{r:?}");
+    let lag = stopped.saturating_duration_since(cancelled_at);
+    assert!(
+        lag < Duration::from_millis(1500),
+        "stopped {lag:?} after the cancel"
+    );
+}
+
+#[test]
+fn every_algorithm_reports_progress() {
+    let b = grid(3, 3, 2.0, &[]);
+    for alg in Algorithm::ALL {
+        let obs = Arc::new(Count::default());
+        let control = Control::new().with_observer(obs.clone());
+        let req = request(&b, 0, 8, 14.0, alg);
+        plan(b.clone(), &req, &control).expect("plan");
+        assert!(
+            obs.calls.load(Ordering::Relaxed) > 0,
+            "{alg} never reported"
+        );
+    }
+}
+
+#[test]
+fn same_seed_same_result() {
+    let b = instance("area-one.json");
+    for alg in [
+        Algorithm::Greedy,
+        Algorithm::Genetic,
+        Algorithm::Ero,
+        Algorithm::Auto,
+    ] {
+        let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
+        req.algorithm = alg;
+        req.seed = 11;
+        req.params.population = 40;
+        req.params.iterations = 200;
+        req.time_limit = Some(Duration::from_secs(60));
+        let a = plan(b.clone(), &req, &Control::new()).expect("a");
+        let c = plan(b.clone(), &req, &Control::new()).expect("c");
+        assert_eq!(a.walk, c.walk, "{alg}");
+        assert_eq!(a.utility_nats, c.utility_nats, "{alg}");
+    }
+}
+
+#[test]
+fn time_limit_returns_the_best_so_far() {
+    let b = instance("area-two.json");
+    let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
+    req.algorithm = Algorithm::Exact;
+    req.time_limit = Some(Duration::from_millis(400));
+    let t = Instant::now();
+    let r = plan(b.clone(), &req, &Control::new()).expect("plan");
+    assert!(t.elapsed() < Duration::from_secs(10));
+    assert_eq!(r.termination, Termination::TimeLimit);
+    assert_eq!(r.optimal, Some(false));
+    assert!(r.nodes.expect("nodes") > 0);
+    assert!(r.length_m <= 140.0 + 1e-9);
+}
+
+#[test]
+fn request_validation_errors_name_the_problem() {
+    let b = instance("area-one.json");
+    let ok = PlanRequest::new("r0c0", "r5c4", 40.0, kernel());
+    let err = |f: &dyn Fn(&mut PlanRequest)| {
+        let mut r = ok.clone();
+        f(&mut r);
+        plan(b.clone(), &r, &Control::new()).expect_err("must fail")
+    };
+    let e = err(&|r| r.start = "nowhere".into());
+    assert!(matches!(e, Error::InvalidRequest(_)));
+    assert!(
+        e.to_string().contains("start") && e.to_string().contains("\"nowhere\""),
+        "{e}"
+    );
+    let e = err(&|r| r.end = "r9c9".into());
+    assert!(
+        e.to_string().contains("end") && e.to_string().contains("\"r9c9\""),
+        "{e}"
+    );
+    for bad in [0.0, -5.0, f64::NAN, f64::INFINITY] {
+        let e = err(&|r| r.budget = bad);
+        assert!(
+            e.to_string()
+                .contains("budget must be a positive finite number"),
+            "{e}"
+        );
+    }
+    let e = err(&|r| r.budget = 20.0);
+    match &e {
+        Error::Unreachable {
+            shortest, budget, ..
+        } => {
+            assert!((shortest - 27.0).abs() < 1e-9);
+            assert_eq!(*budget, 20.0);
+        }
+        other => panic!("expected Unreachable, got {other:?}"),
+    }
+    assert!(
+        e.to_string().contains("r0c0") && e.to_string().contains("27.000"),
+        "{e}"
+    );
+    let e = err(&|r| r.params.mutation = 1.5);
+    assert!(e.to_string().contains("mutation"), "{e}");
+    let e = err(&|r| r.kernel.ell = -1.0);
+    assert!(e.to_string().contains("ell"), "{e}");
+}
+
+#[test]
+fn result_json_has_the_spec_shape() {
+    let b = instance("area-one.json");
+    let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
+    req.algorithm = Algorithm::Exact;
+    let r = plan(b, &req, &Control::new()).expect("plan");
+    let v: serde_json::Value = serde_json::to_value(&r).expect("json");
+    for key in [
+        "algorithm",
+        "walk",
+        "length_m",
+        "budget_m",
+        "samples",
+        "utility_nats",
+        "elapsed_ms",
+        "seed",
+        "kernel",
+        "optimal",
+        "nodes",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    assert_eq!(v["algorithm"], "exact");
+    assert_eq!(v["walk"][0], "r0c0");
+    assert_eq!(v["optimal"], true);
+    assert!(v.get("walk_indices").is_none());
+    let back: trailprint::plan::PlanResult = serde_json::from_value(v).expect("round trip");
+    assert_eq!(back.walk, r.walk);
+    // The request round-trips too (time limit as seconds).
+    let mut q = PlanRequest::new("a", "b", 10.0, kernel());
+    q.time_limit = Some(Duration::from_millis(1500));
+    let text = serde_json::to_string(&q).expect("json");
+    assert!(text.contains("\"time_limit\":1.5"), "{text}");
+    let q2: PlanRequest = serde_json::from_str(&text).expect("parse");
+    assert_eq!(q2, q);
+}
