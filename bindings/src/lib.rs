@@ -11,11 +11,13 @@
 mod building;
 mod error;
 mod model;
+mod plan;
 mod store;
 
 pub use building::*;
 pub use error::{Result, TrailprintError};
 pub use model::*;
+pub use plan::*;
 pub use store::*;
 
 uniffi::setup_scaffolding!();

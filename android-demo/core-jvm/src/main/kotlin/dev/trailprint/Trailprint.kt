@@ -3,11 +3,24 @@ package dev.trailprint
 import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.BuildingSummary
 import dev.trailprint.ffi.FitSummary
+import dev.trailprint.ffi.PlanListener
+import dev.trailprint.ffi.PlanProgress
+import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.PlanSummary
 import dev.trailprint.ffi.TrailprintStore
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.channels.awaitClose
+import kotlinx.coroutines.flow.Flow
+import kotlinx.coroutines.flow.callbackFlow
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.withContext
+
+/** What a running plan reports: progress, then exactly one [Done] (or the flow fails). */
+sealed interface PlanEvent {
+    data class Progress(val progress: PlanProgress) : PlanEvent
+    data class Done(val plan: PlanSummary) : PlanEvent
+}
 
 /**
  * The hand-written Kotlin face of Trailprint: suspend functions that run the (blocking)
@@ -46,6 +59,34 @@ class Trailprint(
     suspend fun plans(buildingId: Long): List<PlanSummary> = withContext(io) { store.listPlans(buildingId) }
 
     suspend fun plan(planId: Long): PlanSummary = withContext(io) { store.getPlan(planId) }
+
+    /**
+     * Plans [request]: progress events while it runs, then [PlanEvent.Done] with the saved
+     * plan. Cancelling the collector cancels the native planner (it stops within one of
+     * its progress checks).
+     */
+    fun plan(request: PlanRequest): Flow<PlanEvent> = callbackFlow {
+        val job = store.newPlan(request)
+        val listener = object : PlanListener {
+            override fun onProgress(progress: PlanProgress) {
+                trySend(PlanEvent.Progress(progress))
+            }
+        }
+        launch(io) {
+            try {
+                val result = job.run(listener)
+                send(PlanEvent.Done(result))
+                close()
+            } catch (e: Exception) {
+                close(e)
+            }
+        }
+        awaitClose {
+            job.cancel()
+            // Safe while run() is still going: the native object lives until that call returns.
+            job.close()
+        }
+    }
 
     override fun close() = store.close()
 }
