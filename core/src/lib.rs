@@ -21,6 +21,7 @@ pub mod render;
 pub mod samples;
 pub mod store;
 pub mod synth;
+pub mod team;
 pub mod utility;
 
 pub use building::Building;

@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use clap::Args as ClapArgs;
-use trailprint::plan::{Algorithm, Params, PlanRequest, plan};
+use trailprint::plan::{Algorithm, Params, PlanRequest, plan_with_prior};
 use trailprint::store::PlanRecord;
 use trailprint::{Error, Result};
 
@@ -98,7 +98,10 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             iterations: a.iterations,
         },
     };
-    let r = plan(b.clone(), &req, &trailprint::plan::Control::new())?;
+    // A new walk should go where the data is thinnest: condition on everything already
+    // collected in this building (nothing for a building read from a file).
+    let prior = crate::store_cli::collected_prior(&a.building.building, db, &kernel)?;
+    let r = plan_with_prior(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
     // A building from the database keeps its plans there; a file has nowhere to keep them.
     let plan_id = if crate::store_cli::is_file_spec(&a.building.building) {
         None
@@ -118,6 +121,12 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     } else {
         if let Some(id) = plan_id {
             println!("plan id       {id}");
+        }
+        if !prior.is_empty() {
+            println!(
+                "conditioned   on {} fingerprints already collected",
+                prior.len()
+            );
         }
         println!("building      {}", b.name);
         println!("algorithm     {}", r.algorithm);

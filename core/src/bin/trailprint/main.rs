@@ -12,6 +12,7 @@ use clap::{Parser, Subcommand};
 
 mod cmd_buildings;
 mod cmd_delete;
+mod cmd_demo;
 mod cmd_evaluate;
 mod cmd_export;
 mod cmd_fit;
@@ -19,6 +20,7 @@ mod cmd_generate;
 mod cmd_import;
 mod cmd_plan;
 mod cmd_render;
+mod cmd_team_plan;
 mod cmd_utility;
 mod opts;
 mod store_cli;
@@ -41,6 +43,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: load the bundled demo building into the database, fit, plan, print.
+    Demo(cmd_demo::Args),
     /// Fit the kernel hyperparameters (sf2, ell, sn2) on a building's pilot data.
     Fit(cmd_fit::Args),
     /// Evaluate the utility (mutual information, nats) of one or more walks.
@@ -59,6 +63,8 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Plan walks for several surveyors that complement each other.
+    TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
 }
@@ -67,6 +73,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let db = cli.db.as_deref();
     let result = match cli.command {
+        Command::Demo(a) => cmd_demo::run(a, db),
+        Command::TeamPlan(a) => cmd_team_plan::run(a, db),
         Command::Fit(a) => cmd_fit::run(a, db),
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),

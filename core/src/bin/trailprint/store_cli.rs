@@ -140,3 +140,26 @@ pub fn write_output(path: &Path, text: &str) -> Result<()> {
         Error::io(path, e)
     })
 }
+
+/// Everything collected so far in `spec`'s building, as observations for conditioning a
+/// plan (the label uncertainty of each fingerprint becomes its extra noise). A building
+/// from a file has nothing collected.
+pub fn collected_prior(
+    spec: &str,
+    db: Option<&Path>,
+    kernel: &trailprint::gp::Kernel,
+) -> Result<Vec<trailprint::utility::Observation>> {
+    if is_file_spec(spec) {
+        return Ok(Vec::new());
+    }
+    let store = open_store(db)?;
+    let bref = building_ref(&store, spec)?;
+    Ok(store
+        .list_collected(bref, None)?
+        .iter()
+        .map(|c| trailprint::utility::Observation {
+            pos: trailprint::gp::Point::new(c.fingerprint.x, c.fingerprint.y, c.fingerprint.floor),
+            extra_noise: kernel.label_noise(c.fingerprint.sigma_m),
+        })
+        .collect())
+}

@@ -1,0 +1,125 @@
+//! `trailprint team-plan`: split one survey among several surveyors so that their walks
+//! complement each other (or, with `--independent`, plan each alone for comparison).
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::Args as ClapArgs;
+use trailprint::plan::{Algorithm, PlanRequest};
+use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
+use trailprint::{Error, Result};
+
+use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
+
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    building: BuildingOpts,
+    /// One surveyor as START:END:BUDGET (repeat for each surveyor).
+    #[arg(long = "surveyor", required = true, value_parser = |s: &str| SurveyorTask::parse(s).map_err(|e| e.to_string()))]
+    surveyors: Vec<SurveyorTask>,
+    /// Plan each surveyor alone, ignoring the others.
+    #[arg(long)]
+    independent: bool,
+    /// Refinement rounds (each surveyor replanned given all the others).
+    #[arg(long, default_value_t = 1)]
+    rounds: usize,
+    /// Planner for each surveyor.
+    #[arg(long, default_value = "genetic", value_parser = |s: &str| Algorithm::from_name(s).map_err(|e| e.to_string()))]
+    algorithm: Algorithm,
+    /// Time limit of each planner run, seconds.
+    #[arg(long)]
+    time_limit: Option<f64>,
+    /// Seed (surveyor i uses SEED + i).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Do not condition on fingerprints already collected in this building.
+    #[arg(long)]
+    ignore_collected: bool,
+    #[command(flatten)]
+    model: ModelOpts,
+    #[command(flatten)]
+    kernel: KernelOpts,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
+    let b = Arc::new(a.building.load(db)?);
+    let (kernel, source) = a.kernel.resolve(&b)?;
+    let mut base = PlanRequest::new("", "", 0.0, kernel);
+    base.model = a.model.model()?;
+    base.algorithm = a.algorithm;
+    base.seed = a.seed;
+    base.time_limit = match a.time_limit {
+        None => None,
+        Some(t) if t.is_finite() && t >= 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => {
+            return Err(Error::InvalidRequest(format!(
+                "--time-limit must be a non-negative number of seconds, got {t}"
+            )));
+        }
+    };
+    let prior = if a.ignore_collected {
+        Vec::new()
+    } else {
+        crate::store_cli::collected_prior(&a.building.building, db, &kernel)?
+    };
+    let req = TeamRequest {
+        surveyors: a.surveyors,
+        base,
+        independent: a.independent,
+        rounds: a.rounds,
+    };
+    let team = plan_team(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
+    if a.json {
+        let out = serde_json::json!({
+            "walks": team.plans.iter().map(|p| p.walk.clone()).collect::<Vec<_>>(),
+            "team_utility_nats": team.team_utility_nats,
+            "utility_nats": team.plans.iter().map(|p| p.utility_nats).collect::<Vec<_>>(),
+            "length_m": team.plans.iter().map(|p| p.length_m).collect::<Vec<_>>(),
+            "samples": team.plans.iter().map(|p| p.samples).collect::<Vec<_>>(),
+            "independent": team.independent,
+            "rounds_used": team.rounds_used,
+            "conditioned_on_collected": prior.len(),
+            "kernel": kernel,
+        });
+        println!("{}", json_line(&out)?);
+    } else {
+        println!("building        {}", b.name);
+        println!(
+            "kernel          sf2={:.4} ell={:.4} sn2={:.4} ({source})",
+            kernel.sf2, kernel.ell, kernel.sn2
+        );
+        if !prior.is_empty() {
+            println!(
+                "conditioned on  {} fingerprints already collected",
+                prior.len()
+            );
+        }
+        for (i, p) in team.plans.iter().enumerate() {
+            println!(
+                "surveyor {}      {:.1} m, {} samples, {:.3} nats alone: {}",
+                i + 1,
+                p.length_m,
+                p.samples,
+                p.utility_nats,
+                p.walk.join(",")
+            );
+        }
+        println!(
+            "team utility    {:.3} nats ({})",
+            team.team_utility_nats,
+            if team.independent {
+                "planned independently".to_string()
+            } else {
+                format!(
+                    "planned as a team, {} refinement rounds used",
+                    team.rounds_used
+                )
+            }
+        );
+    }
+    Ok(())
+}

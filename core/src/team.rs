@@ -1,0 +1,308 @@
+//! Several surveyors sharing one building: team planning.
+//!
+//! K surveyors each have a start, an end and a budget. Planned independently they all
+//! chase the same informative places; planned as a team, each walk is conditioned on the
+//! samples of the others, so the walks complement each other.
+//!
+//! The method ([`plan_team`]):
+//! 1. *In turn*: surveyor `i` is planned conditioned on the pilot data, the `prior`
+//!    (fingerprints already collected) and the samples of walks `0..i`.
+//! 2. *Refinement* (coordinate ascent): each surveyor is replanned conditioned on all the
+//!    other walks; the new walk is kept only if the team utility rises. Because each
+//!    accepted step raises the team utility, the rounds stop (at the round limit or when
+//!    no walk changes).
+//!
+//! The team utility is `f_D` of all the surveyors' samples together (SPEC section 3),
+//! conditioned on the same prior.
+
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::building::Building;
+use crate::plan::{Control, PlanRequest, PlanResult, plan_with_prior};
+use crate::samples::sample_walk;
+use crate::utility::{Observation, UtilityEngine};
+use crate::{Error, Result};
+
+/// One surveyor's assignment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SurveyorTask {
+    pub start: String,
+    pub end: String,
+    pub budget: f64,
+}
+
+impl SurveyorTask {
+    /// Parses `START:END:BUDGET`.
+    pub fn parse(s: &str) -> Result<Self> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let bad = || {
+            Error::InvalidRequest(format!(
+                "surveyor {s:?}: expected START:END:BUDGET, for example b00:b00:120"
+            ))
+        };
+        if parts.len() != 3 || parts[0].is_empty() || parts[1].is_empty() {
+            return Err(bad());
+        }
+        let budget: f64 = parts[2].trim().parse().map_err(|_| bad())?;
+        Ok(SurveyorTask {
+            start: parts[0].trim().to_string(),
+            end: parts[1].trim().to_string(),
+            budget,
+        })
+    }
+}
+
+/// How a team is planned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TeamRequest {
+    pub surveyors: Vec<SurveyorTask>,
+    /// Planner settings shared by all surveyors (`start`, `end`, `budget` are replaced by
+    /// each surveyor's; the seed is offset by the surveyor's index).
+    pub base: PlanRequest,
+    /// Plan each surveyor alone, ignoring the others (for comparison).
+    pub independent: bool,
+    /// Refinement rounds after planning in turn (0: in turn only).
+    pub rounds: usize,
+}
+
+/// The team's walks and what they are worth together.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TeamPlan {
+    /// One plan per surveyor, in request order. Each `utility_nats` is the walk's own
+    /// utility given the prior only (what it would be worth alone).
+    pub plans: Vec<PlanResult>,
+    /// `f_D` of all the surveyors' samples together, given the prior, nats.
+    pub team_utility_nats: f64,
+    /// Refinement rounds that changed at least one walk.
+    pub rounds_used: usize,
+    pub independent: bool,
+}
+
+fn observations(b: &Building, req: &PlanRequest, walk: &[usize]) -> Result<Vec<Observation>> {
+    Ok(sample_walk(b, walk, &req.model, &req.kernel)?
+        .into_iter()
+        .map(|s| Observation {
+            pos: s.pos,
+            extra_noise: s.extra_noise,
+        })
+        .collect())
+}
+
+/// `f_D` of all the walks' samples together, given the engine's prior.
+fn team_utility_of(
+    building: &Building,
+    engine: &UtilityEngine,
+    walks: &[Vec<usize>],
+    request_for: &dyn Fn(usize) -> PlanRequest,
+) -> Result<f64> {
+    let mut all = Vec::new();
+    for (i, w) in walks.iter().enumerate() {
+        all.extend(observations(building, &request_for(i), w)?);
+    }
+    engine.utility_of_observations(&all)
+}
+
+/// Plans a team of surveyors.
+///
+/// # Arguments
+/// * `building` - the building.
+/// * `req` - the surveyors and the shared planner settings.
+/// * `prior` - observations already collected (conditioning for every walk).
+/// * `control` - cancel token and progress observer, shared by all the planner runs.
+///
+/// # Errors
+/// An empty team, or any error of [`plan_with_prior`] for a surveyor (named by index).
+pub fn plan_team(
+    building: Arc<Building>,
+    req: &TeamRequest,
+    prior: &[Observation],
+    control: &Control,
+) -> Result<TeamPlan> {
+    if req.surveyors.is_empty() {
+        return Err(Error::InvalidRequest(
+            "a team needs at least one surveyor".into(),
+        ));
+    }
+    let request_for = |i: usize| {
+        let t = &req.surveyors[i];
+        let mut r = req.base.clone();
+        r.start = t.start.clone();
+        r.end = t.end.clone();
+        r.budget = t.budget;
+        r.seed = req.base.seed.wrapping_add(i as u64);
+        r
+    };
+    let name_err = |i: usize, e: Error| match e {
+        Error::Cancelled => Error::Cancelled,
+        other => Error::InvalidRequest(format!(
+            "surveyor {} ({}): {other}",
+            i + 1,
+            req.surveyors[i].start
+        )),
+    };
+    let k = req.surveyors.len();
+    let engine =
+        UtilityEngine::with_prior(building.clone(), req.base.kernel, req.base.model, prior)?;
+    let mut walks: Vec<Vec<usize>> = Vec::with_capacity(k);
+    let mut results: Vec<PlanResult> = Vec::with_capacity(k);
+    for i in 0..k {
+        let r = request_for(i);
+        let mut cond = prior.to_vec();
+        if !req.independent {
+            for w in &walks {
+                cond.extend(observations(&building, &r, w)?);
+            }
+        }
+        let res =
+            plan_with_prior(building.clone(), &r, &cond, control).map_err(|e| name_err(i, e))?;
+        walks.push(res.walk_indices.clone());
+        results.push(res);
+        if !req.independent && !walks.is_empty() {
+            // A heuristic planner conditioned on the others can return a walk worth less to
+            // the team than the walk it would plan alone (for example a shorter one); keep
+            // whichever adds more, so that the team never does worse than in turn alone.
+            let alone = plan_with_prior(building.clone(), &r, prior, control)
+                .map_err(|e| name_err(i, e))?;
+            let mut trial = walks.clone();
+            trial[i] = alone.walk_indices.clone();
+            if team_utility_of(&building, &engine, &trial, &request_for)?
+                > team_utility_of(&building, &engine, &walks, &request_for)?
+            {
+                walks[i] = alone.walk_indices.clone();
+                results[i] = alone;
+            }
+        }
+    }
+    let team_utility =
+        |walks: &[Vec<usize>]| team_utility_of(&building, &engine, walks, &request_for);
+    let mut best = team_utility(&walks)?;
+    let mut rounds_used = 0;
+    if !req.independent {
+        for round in 0..req.rounds {
+            let mut changed = false;
+            for i in 0..k {
+                let mut r = request_for(i);
+                r.seed = r.seed.wrapping_add(1000 * (round as u64 + 1));
+                let mut cond = prior.to_vec();
+                for (j, w) in walks.iter().enumerate() {
+                    if j != i {
+                        cond.extend(observations(&building, &r, w)?);
+                    }
+                }
+                let res = plan_with_prior(building.clone(), &r, &cond, control)
+                    .map_err(|e| name_err(i, e))?;
+                let mut trial = walks.clone();
+                trial[i] = res.walk_indices.clone();
+                let u = team_utility(&trial)?;
+                if u > best + 1e-9 * best.abs() {
+                    best = u;
+                    walks = trial;
+                    results[i] = res;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+            rounds_used += 1;
+        }
+    }
+    // Report each walk's own utility given the prior only, so the numbers compare.
+    for (res, walk) in results.iter_mut().zip(&walks) {
+        res.utility_nats = engine.utility(walk)?;
+    }
+    Ok(TeamPlan {
+        plans: results,
+        team_utility_nats: best,
+        rounds_used,
+        independent: req.independent,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gp::Kernel;
+    use crate::plan::Algorithm;
+    use crate::samples::SurveyorModel;
+
+    fn area_two() -> Arc<Building> {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/area-two.json");
+        Arc::new(Building::load(&path).expect("area-two"))
+    }
+
+    fn request(independent: bool) -> TeamRequest {
+        let mut base = PlanRequest::new("b00", "b00", 60.0, Kernel::new(100.0, 10.0, 3.3));
+        // Genetic without a time limit: deterministic for a seed, whatever the machine.
+        base.algorithm = Algorithm::Genetic;
+        base.params.population = 60;
+        base.model = SurveyorModel::Robot { interval: 1.0 };
+        base.seed = 3;
+        TeamRequest {
+            surveyors: vec![
+                SurveyorTask {
+                    start: "b00".into(),
+                    end: "b00".into(),
+                    budget: 60.0,
+                },
+                SurveyorTask {
+                    start: "b00".into(),
+                    end: "b00".into(),
+                    budget: 60.0,
+                },
+            ],
+            base,
+            independent,
+            rounds: 1,
+        }
+    }
+
+    #[test]
+    fn a_team_collects_more_than_two_independent_plans() {
+        let b = area_two();
+        let team = plan_team(b.clone(), &request(false), &[], &Control::new()).expect("team");
+        let alone = plan_team(b.clone(), &request(true), &[], &Control::new()).expect("alone");
+        // Alone, both surveyors chase the same places near b00; as a team they split up.
+        assert!(
+            team.team_utility_nats > alone.team_utility_nats * 1.01,
+            "team {} vs independent {}",
+            team.team_utility_nats,
+            alone.team_utility_nats
+        );
+        assert_ne!(team.plans[0].walk, team.plans[1].walk);
+        for (p, t) in team.plans.iter().zip(&request(false).surveyors) {
+            assert!(p.length_m <= t.budget + 1e-9);
+            assert_eq!(p.walk.first(), Some(&t.start));
+            assert_eq!(p.walk.last(), Some(&t.end));
+        }
+        // The team's utility is at most the sum of the parts (submodularity) and at least
+        // the best single walk (monotonicity).
+        let sum: f64 = team.plans.iter().map(|p| p.utility_nats).sum();
+        let max = team
+            .plans
+            .iter()
+            .map(|p| p.utility_nats)
+            .fold(0.0, f64::max);
+        assert!(team.team_utility_nats <= sum + 1e-9 && team.team_utility_nats >= max - 1e-9);
+    }
+
+    #[test]
+    fn surveyor_specs_parse_with_clear_errors() {
+        let t = SurveyorTask::parse("b00:b10:120").expect("ok");
+        assert_eq!(
+            (t.start.as_str(), t.end.as_str(), t.budget),
+            ("b00", "b10", 120.0)
+        );
+        let e = SurveyorTask::parse("b00:120").expect_err("bad").to_string();
+        assert!(e.contains("expected START:END:BUDGET"), "{e}");
+        let mut req = request(false);
+        req.surveyors[1].start = "nope".into();
+        let e = plan_team(area_two(), &req, &[], &Control::new())
+            .expect_err("unknown")
+            .to_string();
+        assert!(e.starts_with("surveyor 2 (nope): "), "{e}");
+    }
+}
