@@ -119,6 +119,6 @@ if (( run_tests )); then
   java "${java_flags[@]}" dev.trailprint.testing.RunTestsKt "$classes" || status=$?
 fi
 if (( run_demo )); then
-  java "${java_flags[@]}" dev.trailprint.demo.HostDemoKt "$repo/shared/instances/area-one.json" || status=$?
+  java "${java_flags[@]}" dev.trailprint.demo.HostDemoKt ${TRAILPRINT_DEMO_BUILDING:+"$TRAILPRINT_DEMO_BUILDING"} || status=$?
 fi
 exit "$status"
