@@ -378,6 +378,13 @@ fn a_robot_walking_the_plan_exactly_collects_the_planned_utility() {
         (sum.collected_utility_nats - sum.planned_utility_nats).abs() / sum.planned_utility_nats;
     assert!(rel < 1e-6, "{sum:?}");
     assert!(sum.planned_utility_nats > 1.0);
+    // Progress follows the walk: every metre of it, corners included.
+    let len = s.building().walk_length(s.tracker().route());
+    assert!(
+        (sum.walked_m - len).abs() < 1e-6,
+        "{} vs {len}",
+        sum.walked_m
+    );
 }
 
 #[test]

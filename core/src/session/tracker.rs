@@ -742,7 +742,9 @@ impl Tracker {
             let v = b.vertices[self.route[0]].pos;
             return (v.floor == p.floor && v.planar_distance(p) <= tol).then_some((0, 0.0));
         }
-        let mut forward: Option<(usize, f64)> = None;
+        // Ahead (or level): the nearest segment, the earliest on a tie (a U-turn retraces
+        // the same line). Behind by less than the tolerance: the latest (pose noise).
+        let mut forward: Option<(usize, f64, f64)> = None;
         let mut backward: Option<(usize, f64)> = None;
         let lookahead = (ROBOT_LOOKAHEAD_INTERVALS * self.surveyor.model().spacing()).max(2.0);
         for k in self.anchor..n - 1 {
@@ -777,14 +779,14 @@ impl Tracker {
             }
             let a = self.arc[k] + t * (self.arc[k + 1] - self.arc[k]);
             if a >= self.robot_arc - ARC_TOL {
-                if forward.is_none_or(|(_, fa)| a < fa) {
-                    forward = Some((k, a));
+                if forward.is_none_or(|(_, fa, fd)| d < fd - 1e-9 || (d <= fd + 1e-9 && a < fa)) {
+                    forward = Some((k, a, d));
                 }
             } else if a >= self.robot_arc - tol && backward.is_none_or(|(_, ba)| a > ba) {
                 backward = Some((k, a));
             }
         }
-        forward.or(backward)
+        forward.map(|(k, a, _)| (k, a)).or(backward)
     }
 
     fn nearest_vertex(b: &Building, p: &Point) -> usize {
@@ -798,11 +800,19 @@ impl Tracker {
         best.1
     }
 
-    /// A robot pose; returns whether it took the robot off-route. The distance walked is
-    /// the robot's odometry: straight lines between consecutive poses.
+    /// A robot pose; returns whether it took the robot off-route. The distance walked
+    /// between two on-route poses is the longer of the distance along the walk (corners
+    /// and turns are not cut) and the straight line (a detour within the tolerance
+    /// counts); otherwise the straight line.
     fn robot_pose(&mut self, b: &Building, p: Point) -> bool {
         let projected = self.project(b, &p);
-        self.move_pose(p);
+        match (self.off, self.pose, projected) {
+            (None, Some(prev), Some((_, a))) => {
+                self.robot_walked_m += (a - self.robot_arc).abs().max(prev.planar_distance(&p));
+                self.pose = Some(p);
+            }
+            _ => self.move_pose(p),
+        }
         match projected {
             Some((k, a)) => {
                 self.anchor = k;
