@@ -79,6 +79,7 @@ fn same_seed_same_result() {
         req.seed = 11;
         req.params.population = 40;
         req.params.iterations = 200;
+        // Long enough for auto's fixed work: the walk must not depend on the clock.
         req.time_limit = Some(Duration::from_secs(60));
         let a = plan(b.clone(), &req, &Control::new()).expect("a");
         let c = plan(b.clone(), &req, &Control::new()).expect("c");

@@ -18,6 +18,8 @@ fn exact_equals_brute_force_on_tiny_buildings() {
         (grid(3, 3, 2.0, &[]), 0, 8, 11.0),
         (grid(3, 2, 2.0, &[1]), 1, 4, 10.5),
         (grid(4, 2, 1.5, &[3, 5]), 0, 0, 10.0),
+        (grid(3, 3, 2.0, &[]), 4, 4, 16.0),
+        (grid(4, 3, 2.0, &[4]), 0, 11, 15.0),
     ];
     for (b, s, t, budget) in cases {
         let p = problem(&b, s, t, budget);

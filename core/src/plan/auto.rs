@@ -1,30 +1,79 @@
-//! `auto`, the default planner: a portfolio that spends a fixed amount of work in stages,
-//! each starting from the best walk so far, all capped by the time limit (2 s by
+//! `auto`, the default planner: a portfolio whose stages each start from the best walk
+//! so far, sized by a deterministic work budget and capped by the time limit (2 s by
 //! default).
 //!
-//! 1. **Greedy** (feasible-candidates variant of the paper's Algorithm 1): a good walk in
-//!    a fraction of the time.
-//! 2. **Genetic** (the paper's operators and defaults) with the greedy walk in the initial
-//!    population, so it can only improve on it.
-//! 3. **Local search** ([`LocalSearch`]): detour insert / segment replace / shortcut /
-//!    2-opt moves, from the best walk, then from a few other distinct walks of the final
-//!    population (restarts), keeping the best.
-//! 4. **Exact** branch and bound seeded with that walk, when a quick count shows the
+//! 1. **Greedy**, the feasible-candidates variant of the paper's Algorithm 1 (the
+//!    paper's rule stops as soon as the best-ratio vertex does not fit, which on a closed
+//!    walk can be the very first round).
+//! 2. **Local search** ([`LocalSearch`]) from the greedy walk: detour insert, segment
+//!    replace, re-route, shortcut and 2-opt moves, evaluated in parallel from the shared
+//!    prefix.
+//!    Then, on small buildings (at most [`SIMPLE_NODE_CAP`] nodes), the best *simple*
+//!    walk (no vertex twice) by the branch and bound of [`Exact`] restricted to them.
+//! 3. **Genetic** search with the paper's operators, its initial population seeded with
+//!    the walks of stages 1 and 2 (so it can only improve on them). Its population is the
+//!    request's (200) when the work budget allows, smaller on large instances.
+//! 4. **Local search** from the best few distinct members of the final population.
+//! 5. **Iterated local search**: kick the current walk with a few random moves, search
+//!    locally again; the current walk may drift to slightly worse local optima and
+//!    returns to the best after a few kicks without progress; until the work budget or
+//!    the deadline is used up.
+//! 6. **Exact** branch and bound seeded with the best walk when a quick count shows the
 //!    search tree is small (at most [`EXACT_NODE_CAP`] nodes under the feasibility rule):
 //!    if it finishes, the walk is proved optimal (`optimal: true`).
 //!
-//! The work of each stage is fixed (generations, rounds, restarts), so the same seed gives
-//! the same walk unless the time limit cuts a stage short (`termination: time_limit`).
+//! The work budget counts walk evaluations weighted by their cost model
+//! `(|D| + B/d)^2 |V|` (the engine's cost of a walk of full budget), scaled by the time
+//! limit, so the same seed and time limit give the same walk unless the machine is too
+//! slow for the limit (then `termination: time_limit`).
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 
 use super::exact::Exact;
 use super::genetic::Genetic;
 use super::greedy::Greedy;
-use super::local_search::LocalSearch;
+use super::local_search::{LocalSearch, perturb};
 use super::{Algorithm, Outcome, Params, Problem, Run, Solver, Termination, better};
 use crate::Result;
 
 /// Largest feasibility-pruned tree for which `auto` runs the exact search.
 pub const EXACT_NODE_CAP: u64 = 200_000;
+
+/// Largest simple-walk tree for which `auto` searches all simple walks.
+pub const SIMPLE_NODE_CAP: u64 = 20_000;
+
+/// Number of nodes of the simple-walk tree (no vertex twice, the end vertex only as the
+/// last step) under the feasibility rule, counting up to `cap`.
+pub fn count_simple(p: &Problem, cap: u64) -> u64 {
+    fn rec(p: &Problem, v: usize, len: f64, on: &mut [bool], count: &mut u64, cap: u64) {
+        *count += 1;
+        if *count > cap || (v == p.end && len > 0.0) {
+            return;
+        }
+        for &(w, e) in p.building.neighbours(v) {
+            let l = len + p.building.edges[e].length;
+            if p.fits(l + p.metric.dist(w, p.end)) && (w == p.end || !on[w]) {
+                on[w] = true;
+                rec(p, w, l, on, count, cap);
+                on[w] = w == p.start;
+                if *count > cap {
+                    return;
+                }
+            }
+        }
+    }
+    let mut on = vec![false; p.building.len()];
+    on[p.start] = true;
+    let mut count = 0;
+    rec(p, p.start, 0.0, &mut on, &mut count, cap);
+    count
+}
+
+/// Cost-model units of work per second of time limit (calibrated so that the default
+/// 2 s suffice on a loaded two-core machine: the engine does about 1.6e9 per second
+/// per thread).
+pub const UNITS_PER_SECOND: f64 = 2.5e9;
 
 /// The `auto` solver.
 #[derive(Debug, Clone)]
@@ -68,52 +117,128 @@ pub fn count_nodes(p: &Problem, cap: u64) -> u64 {
     count
 }
 
+/// Most walk evaluations `auto` spends, however long its time limit: beyond this the
+/// iterated local search has long converged on the buildings we know.
+pub const MAX_EVALS: usize = 20_000;
+
+/// Cost-model units of one evaluation of a walk of full budget: `(|D| + B/d)^2 |V|`
+/// plus a fixed overhead for generating and bookkeeping the move.
+pub fn eval_units(p: &Problem) -> f64 {
+    let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
+    n * n * p.building.len() as f64 + 20_000.0
+}
+
 impl Solver for Auto {
     fn algorithm(&self) -> Algorithm {
         Algorithm::Auto
     }
 
     fn solve(&self, p: &Problem, run: &Run) -> Result<Outcome> {
+        // From the configured limit, not the time left, so that the work is deterministic.
+        let secs = run.time_limit().map_or(2.0, |d| d.as_secs_f64());
+        // Evaluations the work budget allows.
+        let budget_evals =
+            (secs * UNITS_PER_SECOND / eval_units(p)).clamp(50.0, MAX_EVALS as f64) as usize;
+        let mut used = 0usize;
+        let report = |f: f64, u: f64, m: &str| run.report(Algorithm::Auto, f, Some(u), m.into());
+
+        // 1. Greedy.
         let g = Greedy::feasible().solve(p, run)?;
         let (mut walk, mut util) = (g.walk, g.utility);
-        run.report(Algorithm::Greedy, 0.1, Some(util), "greedy done".into());
-        let ga = Genetic::new(self.params, self.seed).with_seeds(vec![walk.clone()]);
-        let (pop, _) = ga.evolve(p, run)?;
-        if let Some(b) = pop.first()
-            && better((&b.walk, b.utility), (&walk, util))
-        {
-            walk = b.walk.clone();
-            util = b.utility;
+        used += p.building.len() * 4;
+        report(0.1, util, "greedy");
+
+        // 2. Local search from the greedy walk.
+        let (w, u, n) = LocalSearch::new(self.seed).improve_counted(p, run, walk.clone(), util)?;
+        used += n;
+        let greedy_walk = walk.clone();
+        if better((&w, u), (&walk, util)) {
+            walk = w;
+            util = u;
         }
-        run.report(Algorithm::Genetic, 0.4, Some(util), "genetic done".into());
-        // Local search from the best, then from other distinct members of the population.
-        let mut starts: Vec<(Vec<usize>, f64)> = vec![(walk.clone(), util)];
-        for ind in pop.iter() {
-            if starts.len() > self.restarts {
-                break;
-            }
-            if !starts.iter().any(|(w, _)| *w == ind.walk) {
-                starts.push((ind.walk.clone(), ind.utility));
+        report(0.2, util, "local search");
+
+        // 2b. Best simple walk, when there are few (small buildings).
+        if !run.should_stop() && count_simple(p, SIMPLE_NODE_CAP) <= SIMPLE_NODE_CAP {
+            let ex = Exact::simple_walks(SIMPLE_NODE_CAP * 2)
+                .with_incumbent(walk.clone())
+                .solve(p, run)?;
+            used += (SIMPLE_NODE_CAP / 8) as usize;
+            if better((&ex.walk, ex.utility), (&walk, util)) {
+                walk = ex.walk;
+                util = ex.utility;
             }
         }
-        for (k, (w, u)) in starts.into_iter().enumerate() {
-            if run.should_stop() {
+
+        // 3. Genetic, seeded, sized to about 40% of the work budget.
+        let mut pop = Vec::new();
+        if !run.should_stop() {
+            let mut prm = self.params;
+            let gens = prm.generations.max(1);
+            let afford = (budget_evals as f64 * 0.4 / (gens + 1) as f64) as usize;
+            prm.population = prm.population.min(afford).max(20);
+            let ga = Genetic::new(prm, self.seed).with_seeds(vec![walk.clone(), greedy_walk]);
+            let (pp, _) = ga.evolve(p, run)?;
+            used += prm.population * (gens + 1);
+            if let Some(b) = pp.first()
+                && better((&b.walk, b.utility), (&walk, util))
+            {
+                walk = b.walk.clone();
+                util = b.utility;
+            }
+            pop = pp;
+            report(0.5, util, "genetic");
+        }
+
+        // 4. Local search from the best distinct members of the population.
+        for (k, ind) in pop.iter().take(self.restarts).enumerate() {
+            if run.should_stop() || used >= budget_evals {
                 break;
             }
             let ls = LocalSearch::new(self.seed.wrapping_add(k as u64 + 1));
-            let (w2, u2) = ls.improve(p, run, w, u)?;
-            if better((&w2, u2), (&walk, util)) {
-                walk = w2;
-                util = u2;
+            let (w, u, n) = ls.improve_counted(p, run, ind.walk.clone(), ind.utility)?;
+            used += n;
+            if better((&w, u), (&walk, util)) {
+                walk = w;
+                util = u;
             }
-            run.report(
-                Algorithm::Auto,
-                0.4 + 0.1 * (k + 1) as f64,
-                Some(util),
-                format!("local search {}", k + 1),
-            );
         }
+        report(0.7, util, "restarts");
+
+        // 5. Iterated local search: kicks of 2 to 5 random moves; the current walk may
+        //    drift to a local optimum up to 0.3% worse; back to the best after 8 kicks
+        //    without a new best.
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x9e37_79b9_7f4a_7c15);
+        let (mut cur, mut cur_u) = (walk.clone(), util);
+        let mut kick = 0u64;
+        let mut stale = 0;
+        while used < budget_evals && !run.should_stop() {
+            kick += 1;
+            let start = perturb(p, &cur, 2 + (kick % 4) as usize, &mut rng);
+            let su = p.utility(&start)?;
+            let ls = LocalSearch::new(self.seed.wrapping_add(1000 + kick));
+            let (w, u, n) = ls.improve_counted(p, run, start, su)?;
+            used += n + 1;
+            stale += 1;
+            if better((&w, u), (&walk, util)) {
+                walk = w.clone();
+                util = u;
+                stale = 0;
+            }
+            if u >= cur_u - 0.003 * cur_u.abs() {
+                cur = w;
+                cur_u = u;
+            }
+            if stale >= 8 {
+                cur = walk.clone();
+                cur_u = util;
+                stale = 0;
+            }
+        }
+        report(0.9, util, "iterated local search");
         run.check()?;
+
+        // 6. Exact, when the tree is small.
         let mut out = Outcome::new(walk.clone(), util, Termination::Completed);
         if !run.should_stop() && count_nodes(p, EXACT_NODE_CAP) <= EXACT_NODE_CAP {
             let ex = Exact::new().with_incumbent(walk.clone()).solve(p, run)?;
@@ -129,6 +254,7 @@ impl Solver for Auto {
         if run.out_of_time() && out.optimal != Some(true) {
             out.termination = Termination::TimeLimit;
         }
+        report(1.0, out.utility, "done");
         Ok(out)
     }
 }

@@ -71,6 +71,11 @@ pub struct Exact {
     pub transpositions: bool,
     /// Most states kept in the transposition table.
     pub table_cap: usize,
+    /// Restrict the search to simple walks (no vertex twice, except the end vertex as
+    /// the last step). Not exact any more: `auto` uses it as a cheap heuristic stage.
+    pub simple: bool,
+    /// Stop after this many nodes (then `optimal: false`).
+    pub node_cap: Option<u64>,
 }
 
 impl Default for Exact {
@@ -80,6 +85,8 @@ impl Default for Exact {
             bound: true,
             transpositions: true,
             table_cap: 16_000_000,
+            simple: false,
+            node_cap: None,
         }
     }
 }
@@ -96,6 +103,17 @@ impl Exact {
             bound: false,
             transpositions: false,
             table_cap: 0,
+            simple: false,
+            node_cap: None,
+        }
+    }
+
+    /// The best simple walk (see [`Exact::simple`]), within `node_cap` nodes.
+    pub fn simple_walks(node_cap: u64) -> Self {
+        Exact {
+            simple: true,
+            node_cap: Some(node_cap),
+            ..Exact::default()
         }
     }
 
@@ -151,6 +169,8 @@ struct Shared<'a> {
     table_cap: usize,
     bound: Option<(f64, f64)>,
     last_sample: f64,
+    simple: bool,
+    node_cap: u64,
     z: Vec<(u64, u64)>,
     zv: Vec<(u64, u64)>,
 }
@@ -217,7 +237,7 @@ impl Shared<'_> {
             self.nodes.fetch_add(*local, Ordering::Relaxed);
             *local = 0;
             self.run.check()?;
-            if self.run.out_of_time() {
+            if self.run.out_of_time() || self.nodes.load(Ordering::Relaxed) > self.node_cap {
                 self.timed_out.store(true, Ordering::Relaxed);
             }
         }
@@ -243,9 +263,15 @@ impl Shared<'_> {
         }
         let len = st.length();
         let b = &p.building;
+        if self.simple && v == p.end && st.walk().len() > 1 {
+            return Ok(());
+        }
         for &(w, e) in b.neighbours(v) {
             let l = len + b.edges[e].length;
             if !p.fits(l + p.metric.dist(w, p.end)) {
+                continue;
+            }
+            if self.simple && w != p.end && st.walk().contains(&w) {
                 continue;
             }
             let mark = st.mark();
@@ -303,6 +329,8 @@ impl Solver for Exact {
             table_cap: self.table_cap,
             bound,
             last_sample,
+            simple: self.simple,
+            node_cap: self.node_cap.unwrap_or(u64::MAX),
             z,
             zv,
         };

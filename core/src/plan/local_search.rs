@@ -5,8 +5,12 @@
 //!   where it costs least (or at a random position);
 //! * **segment replace** (remove + insert, a "swap"): cut the sub-walk between positions
 //!   `i < j` and go from `W[i]` to `W[j]` through another vertex instead;
+//! * **bulge move**: shortcut a sub-walk and spend the freed length on a detour
+//!   elsewhere;
 //! * **shortcut**: replace the sub-walk between `i < j` by a shortest path (frees budget
 //!   for a later insert);
+//! * **re-route**: replace the sub-walk between `i < j` by a random walk between the
+//!   same two vertices that fits the budget slack;
 //! * **2-opt**: reverse the sub-walk `W[i..=j]`, reconnecting its ends by shortest paths
 //!   (changes the visiting order of the covered vertices).
 //!
@@ -39,8 +43,8 @@ impl LocalSearch {
     pub fn new(seed: u64) -> Self {
         LocalSearch {
             seed,
-            batch: 32,
-            patience: 12,
+            batch: 16,
+            patience: 16,
             max_rounds: 10_000,
         }
     }
@@ -92,8 +96,27 @@ fn splice(p: &Problem, w: &[usize], i: usize, via: &[usize], j: usize) -> Vec<us
     out
 }
 
+/// A random vertex `v` such that going `w[i] -> v -> w[j]` instead of `w[i..=j]` fits
+/// the budget and changes the walk.
+fn reachable(p: &Problem, w: &[usize], i: usize, j: usize, rng: &mut ChaCha8Rng) -> Option<usize> {
+    let m = &p.metric;
+    let allowed = p.budget - p.length(w) + p.length(&w[i..=j]) + 1e-9;
+    let cands: Vec<usize> = (0..p.building.len())
+        .filter(|&v| m.dist(w[i], v) + m.dist(v, w[j]) <= allowed && !w[i..=j].contains(&v))
+        .collect();
+    if cands.is_empty() {
+        None
+    } else {
+        Some(cands[rng.random_range(0..cands.len())])
+    }
+}
+
 /// Draws one random move; `None` if it does not fit or changes nothing.
 fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
+    random_move_at(p, w, rng, 0)
+}
+
+fn random_move_at(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng, depth: usize) -> Option<Move> {
     let n = p.building.len();
     let len = w.len();
     let kind = rng.random_range(0..100u32);
@@ -103,15 +126,33 @@ fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
         let (nw, _) = super::genetic::insert_detour(p, w, p.length(w), v)?;
         nw
     } else if kind < 40 {
-        // Detour at a random position.
-        let v = rng.random_range(0..n);
+        // Detour at a random position, through a vertex the slack can reach.
         let i = rng.random_range(0..len - 1);
+        let v = reachable(p, w, i, i + 1, rng)?;
         splice(p, w, i, &[v], i + 1)
+    } else if kind < 55 {
+        // Move a bulge: shortcut the segment i..j, then spend the freed length on a
+        // detour at another random position.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(2..=10usize)).min(len - 1);
+        let cut = splice(p, w, i, &[], j);
+        if cut.len() < 2 {
+            return None;
+        }
+        if depth > 0 || rng.random_bool(0.5) {
+            let k = rng.random_range(0..cut.len() - 1);
+            let v = reachable(p, &cut, k, k + 1, rng)?;
+            splice(p, &cut, k, &[v], k + 1)
+        } else {
+            // Or any other move on the shortened walk (a replace or re-route can now use
+            // the freed length).
+            random_move_at(p, &cut, rng, depth + 1)?.walk
+        }
     } else if kind < 75 {
-        // Replace the segment i..j by a detour through v.
+        // Replace the segment i..j by a detour through a vertex that fits.
         let i = rng.random_range(0..len - 1);
         let j = (i + rng.random_range(1..=8usize)).min(len - 1);
-        let v = rng.random_range(0..n);
+        let v = reachable(p, w, i, j, rng)?;
         splice(p, w, i, &[v], j)
     } else if kind < 82 {
         // Replace the segment i..j by a detour through two vertices.
@@ -120,11 +161,45 @@ fn random_move(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng) -> Option<Move> {
         let a = rng.random_range(0..n);
         let b = rng.random_range(0..n);
         splice(p, w, i, &[a, b], j)
-    } else if kind < 85 {
+    } else if kind < 84 {
         // Shortcut.
         let i = rng.random_range(0..len - 1);
         let j = (i + rng.random_range(2..=10usize)).min(len - 1);
         splice(p, w, i, &[], j)
+    } else if kind < 92 {
+        // Re-route: replace w[i..=j] by a random walk from w[i] to w[j] that fits.
+        let i = rng.random_range(0..len - 1);
+        let j = (i + rng.random_range(1..=8usize)).min(len - 1);
+        let slack = p.budget - p.length(w);
+        let allowed = p.length(&w[i..=j]) + slack;
+        let mut seg = vec![w[i]];
+        let mut l = 0.0;
+        let b = &p.building;
+        let mut opts: Vec<(usize, f64)> = Vec::new();
+        loop {
+            let v = *seg.last().unwrap_or(&w[i]);
+            if v == w[j] && rng.random_bool(0.5) {
+                break;
+            }
+            opts.clear();
+            for &(x, e) in b.neighbours(v) {
+                let el = b.edges[e].length;
+                if l + el + p.metric.dist(x, w[j]) <= allowed + 1e-9 {
+                    opts.push((x, el));
+                }
+            }
+            if opts.is_empty() {
+                break;
+            }
+            let (x, el) = opts[rng.random_range(0..opts.len())];
+            seg.push(x);
+            l += el;
+        }
+        p.metric.extend_path(&mut seg, w[j]);
+        let mut out = w[..i].to_vec();
+        out.extend_from_slice(&seg);
+        out.extend_from_slice(&w[j + 1..]);
+        out
     } else {
         // 2-opt: reverse w[i..=j], 1 <= i < j <= len - 2.
         if len < 4 {
@@ -161,6 +236,19 @@ impl LocalSearch {
         walk: Vec<usize>,
         utility: f64,
     ) -> Result<(Vec<usize>, f64)> {
+        self.improve_counted(p, run, walk, utility)
+            .map(|(w, u, _)| (w, u))
+    }
+
+    /// [`improve`](Self::improve), also returning the number of walks evaluated.
+    pub fn improve_counted(
+        &self,
+        p: &Problem,
+        run: &Run,
+        walk: Vec<usize>,
+        utility: f64,
+    ) -> Result<(Vec<usize>, f64, usize)> {
+        let mut evals = 0;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let (mut walk, mut utility) = (walk, utility);
         let mut pre = Prefixes::new(p, &walk)?;
@@ -181,6 +269,7 @@ impl LocalSearch {
             if moves.is_empty() {
                 break;
             }
+            evals += moves.len();
             let us: Vec<Result<f64>> = moves
                 .par_iter()
                 .map(|m| pre.eval(m.keep, &m.walk[m.keep + 1..]))
@@ -202,6 +291,22 @@ impl LocalSearch {
                 None => idle += 1,
             }
         }
-        Ok((walk, utility))
+        Ok((walk, utility, evals))
     }
+}
+
+/// Applies `strength` random feasible moves to `walk`, whatever they do to the utility
+/// (the kick of an iterated local search).
+pub fn perturb(p: &Problem, walk: &[usize], strength: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
+    let mut w = walk.to_vec();
+    let mut done = 0;
+    let mut tries = 0;
+    while done < strength && tries < strength * 50 {
+        tries += 1;
+        if let Some(m) = random_move(p, &w, rng) {
+            w = m.walk;
+            done += 1;
+        }
+    }
+    w
 }

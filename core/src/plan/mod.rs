@@ -392,6 +392,12 @@ impl Run {
         self.control.is_cancelled() || self.out_of_time()
     }
 
+    /// The time limit (deadline minus start), if any.
+    pub fn time_limit(&self) -> Option<Duration> {
+        self.deadline
+            .map(|d| d.saturating_duration_since(self.started))
+    }
+
     /// The deadline, if any.
     pub fn deadline(&self) -> Option<Instant> {
         self.deadline

@@ -80,7 +80,11 @@ pub fn request(b: &Building, s: usize, t: usize, budget: f64, alg: Algorithm) ->
     r.params.population = 30;
     r.params.generations = 3;
     r.params.iterations = 150;
-    r.time_limit = Some(std::time::Duration::from_secs(20));
+    r.time_limit = Some(std::time::Duration::from_secs(if alg == Algorithm::Auto {
+        1
+    } else {
+        20
+    }));
     r
 }
 
