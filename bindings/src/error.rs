@@ -78,7 +78,8 @@ mod tests {
     #[test]
     fn every_core_error_maps_to_the_variant_the_app_acts_on_and_keeps_its_message() {
         let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
-        let cases: Vec<(E, fn(&T) -> bool)> = vec![
+        type IsVariant = fn(&T) -> bool;
+        let cases: Vec<(E, IsVariant)> = vec![
             (E::io("/x/b.json", io), |t| matches!(t, T::Io(_))),
             (
                 E::Parse {
