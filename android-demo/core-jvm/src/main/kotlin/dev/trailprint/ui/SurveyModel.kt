@@ -146,6 +146,9 @@ class SurveyModel(
 
     fun finish() = scope.launch { controller?.finish() }
 
+    /** Shows an error from outside the session (for example the robot link). */
+    fun reportError(message: String) = _state.update { it.copy(error = message) }
+
     fun dismissError() {
         controller?.dismissError()
         _state.update { it.copy(error = null) }
