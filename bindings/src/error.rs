@@ -69,3 +69,75 @@ impl From<trailprint::Error> for TrailprintError {
 
 /// Result alias of the exported functions.
 pub type Result<T, E = TrailprintError> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::TrailprintError as T;
+    use trailprint::Error as E;
+
+    #[test]
+    fn every_core_error_maps_to_the_variant_the_app_acts_on_and_keeps_its_message() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "gone");
+        type IsVariant = fn(&T) -> bool;
+        let cases: Vec<(E, IsVariant)> = vec![
+            (E::io("/x/b.json", io), |t| matches!(t, T::Io(_))),
+            (
+                E::Parse {
+                    origin: "b.json".into(),
+                    path: "vertices[0].x".into(),
+                    message: "bad".into(),
+                },
+                |t| matches!(t, T::InvalidBuilding(_)),
+            ),
+            (E::invalid("b.json", "edges[1].a", "unknown vertex \"q\""), |t| {
+                matches!(t, T::InvalidBuilding(_))
+            }),
+            (
+                E::InvalidWalk {
+                    step: 2,
+                    message: "no edge".into(),
+                },
+                |t| matches!(t, T::InvalidRequest(_)),
+            ),
+            (E::InvalidRequest("budget".into()), |t| {
+                matches!(t, T::InvalidRequest(_))
+            }),
+            (
+                E::Unreachable {
+                    start: "a".into(),
+                    end: "b".into(),
+                    budget: 1.0,
+                    shortest: 2.0,
+                },
+                |t| matches!(t, T::Unreachable(_)),
+            ),
+            (E::Fit("few".into()), |t| matches!(t, T::Fit(_))),
+            (E::Cancelled, |t| matches!(t, T::Cancelled(_))),
+            (E::NotFound("plan 3".into()), |t| matches!(t, T::NotFound(_))),
+            (E::AlreadyExists("building \"A\"".into()), |t| {
+                matches!(t, T::AlreadyExists(_))
+            }),
+            (
+                E::Database {
+                    path: "/d.db".into(),
+                    message: "newer".into(),
+                },
+                |t| matches!(t, T::Database(_)),
+            ),
+            (
+                E::Session {
+                    session: 4,
+                    message: "finished".into(),
+                },
+                |t| matches!(t, T::Session(_)),
+            ),
+            (E::Numerical("not PD".into()), |t| matches!(t, T::Internal(_))),
+        ];
+        for (e, is) in cases {
+            let msg = e.to_string();
+            let t = T::from(e);
+            assert!(is(&t), "{msg} mapped to {t:?}");
+            assert_eq!(t.to_string(), msg);
+        }
+    }
+}

@@ -12,12 +12,14 @@ mod building;
 mod error;
 mod model;
 mod plan;
+mod session;
 mod store;
 
 pub use building::*;
 pub use error::{Result, TrailprintError};
 pub use model::*;
 pub use plan::*;
+pub use session::*;
 pub use store::*;
 
 uniffi::setup_scaffolding!();

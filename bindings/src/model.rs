@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use trailprint::Building;
 use trailprint::samples::SurveyorModel;
+use trailprint::session::Surveyor;
 
 use crate::building::KernelParams;
 use crate::{Result, TrailprintError};
@@ -35,9 +36,7 @@ pub enum SurveyorProfile {
 }
 
 /// Step length assumed for a plan's stored surveyor model, which does not carry one.
-const DEFAULT_STEP_LENGTH_M: f64 = 0.7;
-/// Robot speed assumed for a plan's stored surveyor model, which does not carry one.
-const DEFAULT_ROBOT_SPEED_MPS: f64 = 0.5;
+const DEFAULT_STEP_LENGTH_M: f64 = trailprint::session::DEFAULT_STEP_LENGTH_M;
 
 impl From<SurveyorProfile> for SurveyorModel {
     fn from(p: SurveyorProfile) -> Self {
@@ -66,7 +65,7 @@ impl From<SurveyorModel> for SurveyorProfile {
         match m {
             SurveyorModel::Robot { interval } => SurveyorProfile::Robot {
                 interval_m: interval,
-                speed_mps: DEFAULT_ROBOT_SPEED_MPS,
+                speed_mps: Surveyor::robot().speed_mps(),
             },
             SurveyorModel::Human {
                 speed,
@@ -84,16 +83,70 @@ impl From<SurveyorModel> for SurveyorProfile {
     }
 }
 
+impl From<Surveyor> for SurveyorProfile {
+    fn from(s: Surveyor) -> Self {
+        match s {
+            Surveyor::Robot {
+                interval_m,
+                speed_mps,
+            } => SurveyorProfile::Robot {
+                interval_m,
+                speed_mps,
+            },
+            Surveyor::Human {
+                step_length_m,
+                speed_mps,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+            } => SurveyorProfile::Human {
+                step_length_m,
+                speed_mps,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+            },
+        }
+    }
+}
+
+impl From<SurveyorProfile> for Surveyor {
+    fn from(p: SurveyorProfile) -> Self {
+        match p {
+            SurveyorProfile::Robot {
+                interval_m,
+                speed_mps,
+            } => Surveyor::Robot {
+                interval_m,
+                speed_mps,
+            },
+            SurveyorProfile::Human {
+                step_length_m,
+                speed_mps,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+            } => Surveyor::Human {
+                step_length_m,
+                speed_mps,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+            },
+        }
+    }
+}
+
 /// The human surveyor with the defaults of SPEC section 4 and a 0.7 m step.
 #[uniffi::export]
 pub fn default_human_profile() -> SurveyorProfile {
-    SurveyorModel::human().into()
+    Surveyor::human().into()
 }
 
 /// The paper's robot (a scan every 0.5 m, at 0.5 m/s).
 #[uniffi::export]
 pub fn default_robot_profile() -> SurveyorProfile {
-    SurveyorModel::robot().into()
+    Surveyor::robot().into()
 }
 
 /// A kernel fitted on pilot data.

@@ -7,6 +7,10 @@ import dev.trailprint.ffi.PlanListener
 import dev.trailprint.ffi.PlanProgress
 import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.PlanSummary
+import dev.trailprint.ffi.SessionInfo
+import dev.trailprint.ffi.SessionOptions
+import dev.trailprint.ffi.SurveySession
+import dev.trailprint.ffi.SurveyorProfile
 import dev.trailprint.ffi.TrailprintStore
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.Dispatchers
@@ -87,6 +91,15 @@ class Trailprint(
             job.close()
         }
     }
+
+    /** Starts a survey session on a saved plan. */
+    suspend fun startSession(planId: Long, surveyor: SurveyorProfile, options: SessionOptions? = null): SurveySession =
+        withContext(io) { store.startSession(planId, surveyor, options) }
+
+    /** Reopens a stored session where its log ends. */
+    suspend fun resumeSession(sessionId: Long): SurveySession = withContext(io) { store.resumeSession(sessionId) }
+
+    suspend fun sessions(buildingId: Long): List<SessionInfo> = withContext(io) { store.listSessions(buildingId) }
 
     override fun close() = store.close()
 }

@@ -11,6 +11,7 @@ import androidx.compose.runtime.getValue
 import androidx.compose.runtime.mutableStateOf
 import androidx.compose.runtime.saveable.rememberSaveable
 import androidx.compose.runtime.setValue
+import androidx.compose.ui.platform.LocalContext
 import dev.trailprint.app.ui.BuildingsScreen
 import dev.trailprint.app.ui.FinishScreen
 import dev.trailprint.app.ui.PlanScreen
@@ -50,6 +51,7 @@ private fun AppNavigation() {
             planId = parts[1].toLong(),
             robot = parts[2].toBoolean(),
             onFinished = { sessionId -> route = Routes.finish(sessionId) },
+            rosbridgeUrl = (LocalContext.current.applicationContext as TrailprintApp).rosbridgeUrl,
         )
         "finish" -> FinishScreen(sessionId = parts[1].toLong(), onDone = { route = Routes.BUILDINGS })
         else -> BuildingsScreen(onOpen = { id -> route = Routes.plan(id) })

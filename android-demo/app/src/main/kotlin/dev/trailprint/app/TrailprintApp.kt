@@ -11,6 +11,9 @@ class TrailprintApp : Application() {
         Trailprint(TrailprintStore.open(File(filesDir, "trailprint.db").path))
     }
 
+    /** Robot mode: a rosbridge WebSocket URL (`ws://robot:9090`), or null for the simulated robot. */
+    @Volatile var rosbridgeUrl: String? = null
+
     /** The demo building shipped in the assets (android-demo/demo/demo-building.json). */
     fun demoBuildingJson(): String = assets.open("demo-building.json").bufferedReader().use { it.readText() }
 }

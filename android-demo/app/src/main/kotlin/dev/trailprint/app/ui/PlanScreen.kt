@@ -17,6 +17,10 @@ import androidx.compose.material3.Text
 import androidx.compose.material3.TextButton
 import androidx.compose.runtime.Composable
 import androidx.compose.runtime.getValue
+import androidx.compose.runtime.mutableStateOf
+import androidx.compose.runtime.remember
+import androidx.compose.runtime.setValue
+import androidx.compose.ui.platform.LocalContext
 import androidx.compose.ui.Modifier
 import androidx.compose.ui.unit.dp
 import androidx.lifecycle.AndroidViewModel
@@ -81,6 +85,17 @@ fun PlanScreen(
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
             FilterChip(s.profile == Profile.HUMAN, { m.setProfile(Profile.HUMAN) }, { Text("Walking") })
             FilterChip(s.profile == Profile.ROBOT, { m.setProfile(Profile.ROBOT) }, { Text("Robot") })
+        }
+        if (s.profile == Profile.ROBOT) {
+            val app = LocalContext.current.applicationContext as TrailprintApp
+            var url by remember { mutableStateOf(app.rosbridgeUrl ?: "") }
+            OutlinedTextField(
+                value = url,
+                onValueChange = { url = it; app.rosbridgeUrl = it.trim().ifEmpty { null } },
+                label = { Text("rosbridge URL (empty: simulated robot)") },
+                singleLine = true,
+                modifier = Modifier.fillMaxWidth(),
+            )
         }
         Row(horizontalArrangement = Arrangement.spacedBy(4.dp)) {
             for (a in listOf(PlanAlgorithm.AUTO, PlanAlgorithm.GREEDY, PlanAlgorithm.GENETIC, PlanAlgorithm.EXACT)) {

@@ -40,6 +40,7 @@ import dev.trailprint.ffi.Turn
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
 import dev.trailprint.robot.RobotDriver
+import dev.trailprint.robot.RobotException
 import dev.trailprint.robot.RosbridgeConfig
 import dev.trailprint.robot.RosbridgeRobotDriver
 import dev.trailprint.robot.SimulatedRobot
@@ -61,16 +62,22 @@ class SurveyViewModel(app: Application, private val planId: Long, private val ro
     fun start() {
         val profile = if (robot) defaultRobotProfile() else defaultHumanProfile()
         model.start(planId, profile) { controller, map ->
-            if (!robot) {
-                controller.attachHumanSensors(AndroidStepSource(getApplication()), wifi)
-                return@start
+            if (robot) startRobot(controller, map) else controller.attachHumanSensors(AndroidStepSource(getApplication()), wifi)
+        }
+    }
+
+    private fun startRobot(controller: dev.trailprint.survey.SurveyController, map: dev.trailprint.ffi.BuildingMap) {
+        val d = rosbridgeUrl?.let { RosbridgeRobotDriver(OkHttpWebSocketFactory(), RosbridgeConfig(url = it)) }
+            ?: SimulatedRobot(SimulatedRobotConfig(speed = 0.5))
+        driver = d
+        controller.attachRobot(d, wifi)
+        val pos = map.vertices.associate { it.id to Position(it.x, it.y, it.floor) }
+        viewModelScope.launch {
+            try {
+                d.follow(controller.waypointsAhead(pos))
+            } catch (e: RobotException) {
+                model.reportError("Robot: ${e.message}")
             }
-            val d = rosbridgeUrl?.let { RosbridgeRobotDriver(OkHttpWebSocketFactory(), RosbridgeConfig(url = it)) }
-                ?: SimulatedRobot(SimulatedRobotConfig(speed = 0.5))
-            driver = d
-            controller.attachRobot(d, wifi)
-            val pos = map.vertices.associate { it.id to Position(it.x, it.y, it.floor) }
-            viewModelScope.launch { d.follow(controller.waypointsAhead(pos)) }
         }
     }
 
