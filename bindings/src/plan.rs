@@ -195,7 +195,10 @@ impl TrailprintStore {
         let building = Arc::new(self.inner.get_building(r.building_id)?);
         let kernel = self.kernel_for(r.building_id)?;
         let req = core_request(r, kernel)?;
-        let res = trailprint::plan::plan(building, &req, control)?;
+        // Condition on everything already collected in this building, so that a new walk
+        // goes where the data is thinnest.
+        let prior = self.inner.collected_observations(r.building_id, &kernel)?;
+        let res = trailprint::plan::plan_with_prior(building, &req, &prior, control)?;
         let record = PlanRecord::from_plan(&req, &res, core_store::now_ms());
         let id = self.inner.save_plan(r.building_id, &record)?;
         Ok(self.inner.load_plan(id)?.into())

@@ -429,3 +429,23 @@ fn import_in_tx(
     tx.commit()?;
     Ok(report)
 }
+
+impl Store {
+    /// Everything collected so far in a building, as observations to condition a plan on
+    /// (a new surveyor's walk then goes where the data is thinnest). The label uncertainty
+    /// `sigma_m` of each fingerprint becomes its extra noise under `kernel` (SPEC 4).
+    pub fn collected_observations<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        kernel: &crate::gp::Kernel,
+    ) -> Result<Vec<crate::utility::Observation>> {
+        Ok(self
+            .list_collected(building, None)?
+            .iter()
+            .map(|c| crate::utility::Observation {
+                pos: crate::gp::Point::new(c.fingerprint.x, c.fingerprint.y, c.fingerprint.floor),
+                extra_noise: kernel.label_noise(c.fingerprint.sigma_m),
+            })
+            .collect())
+    }
+}

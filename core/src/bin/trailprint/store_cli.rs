@@ -141,9 +141,8 @@ pub fn write_output(path: &Path, text: &str) -> Result<()> {
     })
 }
 
-/// Everything collected so far in `spec`'s building, as observations for conditioning a
-/// plan (the label uncertainty of each fingerprint becomes its extra noise). A building
-/// from a file has nothing collected.
+/// Everything collected so far in `spec`'s building (nothing for a building read from a
+/// file); see [`trailprint::Store::collected_observations`].
 pub fn collected_prior(
     spec: &str,
     db: Option<&Path>,
@@ -154,12 +153,5 @@ pub fn collected_prior(
     }
     let store = open_store(db)?;
     let bref = building_ref(&store, spec)?;
-    Ok(store
-        .list_collected(bref, None)?
-        .iter()
-        .map(|c| trailprint::utility::Observation {
-            pos: trailprint::gp::Point::new(c.fingerprint.x, c.fingerprint.y, c.fingerprint.floor),
-            extra_noise: kernel.label_noise(c.fingerprint.sigma_m),
-        })
-        .collect())
+    store.collected_observations(bref, kernel)
 }
