@@ -7,7 +7,8 @@
 //! information utility that the planners maximise ([`utility`]).
 //!
 //! Around the planner: synthetic buildings and their radio world ([`synth`]), the
-//! localization evaluation of SPEC section 5 ([`eval`]) and SVG drawings ([`render`]).
+//! localization evaluation of SPEC section 5 ([`eval`]), the paper's experiment
+//! ([`experiment`]) and SVG drawings ([`render`]).
 //! Everything the phone keeps lives in one SQLite file ([`store`]).
 //!
 //! This crate knows nothing of FFI; `bindings/` translates its types for Kotlin.
@@ -15,10 +16,12 @@
 pub mod building;
 pub mod error;
 pub mod eval;
+pub mod experiment;
 pub mod gp;
 pub mod plan;
 pub mod render;
 pub mod samples;
+pub mod session;
 pub mod store;
 pub mod synth;
 pub mod team;

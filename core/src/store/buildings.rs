@@ -117,6 +117,18 @@ pub(super) fn import(
     options: &ImportOptions<'_>,
 ) -> Result<ImportReport> {
     let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let out = import_in(&tx, b, source, options)?;
+    tx.commit()?;
+    Ok(out)
+}
+
+/// [`import`] inside a transaction the caller owns.
+pub(super) fn import_in(
+    tx: &Connection,
+    b: &Building,
+    source: Option<&str>,
+    options: &ImportOptions<'_>,
+) -> Result<ImportReport> {
     let mut rows = 0u64;
     let mut row = || {
         rows += 1;
@@ -248,7 +260,6 @@ pub(super) fn import(
             }
         }
     }
-    tx.commit()?;
     Ok(ImportReport {
         id,
         name: b.name.clone(),

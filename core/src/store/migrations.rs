@@ -25,11 +25,18 @@ pub struct Migration {
 }
 
 /// All steps, in order; step `i` takes the database from version `i` to `i + 1`.
-pub const MIGRATIONS: &[Migration] = &[Migration {
-    version: 1,
-    name: "0001_init",
-    sql: include_str!("../../../schema/migrations/0001_init.sql"),
-}];
+pub const MIGRATIONS: &[Migration] = &[
+    Migration {
+        version: 1,
+        name: "0001_init",
+        sql: include_str!("../../../schema/migrations/0001_init.sql"),
+    },
+    Migration {
+        version: 2,
+        name: "0002_bundles",
+        sql: include_str!("../../../schema/migrations/0002_bundles.sql"),
+    },
+];
 
 /// The schema version this build writes: the number of the last migration.
 pub const SCHEMA_VERSION: u32 = MIGRATIONS.len() as u32;

@@ -15,6 +15,7 @@
 //! session logic lives elsewhere.
 
 mod buildings;
+mod bundles;
 mod conn;
 mod export;
 mod fits;
@@ -29,6 +30,10 @@ use rusqlite::Connection;
 
 pub use buildings::{
     BuildingInfo, ImportOptions, ImportReport, MAX_IMPORT_BYTES, read_import_text,
+};
+pub use bundles::{
+    BUNDLE_FORMAT, BundleBody, BundleEvent, BundleImportReport, BundlePlan, BundleSession,
+    ExportOptions, parse_bundle,
 };
 pub use export::{collected_csv, collected_json};
 pub use fits::{FitRecord, StoredFit};
@@ -380,6 +385,10 @@ impl Reader {
 /// while another connection writes (WAL). Without it, a delete landing between two SELECTs
 /// could pair one building's row with another's vertices.
 fn read_tx<T>(conn: &Connection, f: impl FnOnce(&Connection) -> Result<T>) -> Result<T> {
+    // Inside a caller's transaction (a bundle import) the reads already see one snapshot.
+    if !conn.is_autocommit() {
+        return f(conn);
+    }
     let tx = conn.unchecked_transaction()?;
     let out = f(&tx)?;
     tx.finish()?;

@@ -79,6 +79,19 @@ pub(super) fn save(
     building: BuildingRef<'_>,
     plan: &PlanRecord,
 ) -> Result<i64> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let out = save_in(&tx, building, plan)?;
+    tx.commit()?;
+    Ok(out)
+}
+
+/// [`save`] inside a transaction the caller owns (bundle import writes many
+/// sessions in one).
+pub(super) fn save_in(
+    tx: &Connection,
+    building: BuildingRef<'_>,
+    plan: &PlanRecord,
+) -> Result<i64> {
     check(plan)?;
     let as_i64 = |v: u64, what: &str| {
         i64::try_from(v)
@@ -86,8 +99,7 @@ pub(super) fn save(
     };
     let samples = as_i64(plan.samples, "samples")?;
     let elapsed = as_i64(plan.elapsed_ms, "elapsed_ms")?;
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let bid = building_id(&tx, building)?;
+    let bid = building_id(tx, building)?;
     // Every step must be a vertex of this building and every hop an edge of it.
     {
         let mut vertex =
@@ -147,7 +159,6 @@ pub(super) fn save(
             st.execute(params![id, step as i64, bid, v])?;
         }
     }
-    tx.commit()?;
     Ok(id)
 }
 

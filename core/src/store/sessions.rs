@@ -133,9 +133,23 @@ pub(super) fn create(
     created_ms: i64,
 ) -> Result<i64> {
     let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let bid = building_id(&tx, building)?;
+    let out = create_in(&tx, building, plan_id, surveyor, created_ms)?;
+    tx.commit()?;
+    Ok(out)
+}
+
+/// [`create`] inside a transaction the caller owns (bundle import writes many
+/// sessions in one).
+pub(super) fn create_in(
+    tx: &Connection,
+    building: BuildingRef<'_>,
+    plan_id: Option<i64>,
+    surveyor: Option<&serde_json::Value>,
+    created_ms: i64,
+) -> Result<i64> {
+    let bid = building_id(tx, building)?;
     if let Some(p) = plan_id
-        && !super::plans::belongs(&tx, p, bid)?
+        && !super::plans::belongs(tx, p, bid)?
     {
         return Err(Error::NotFound(format!(
             "plan {p} of {building} is not in the database"
@@ -147,7 +161,6 @@ pub(super) fn create(
         params![bid, plan_id, created_ms, surveyor.map(|s| s.to_string())],
     )?;
     let id = tx.last_insert_rowid();
-    tx.commit()?;
     Ok(id)
 }
 
@@ -189,6 +202,20 @@ pub(super) fn append(
     at_ms: i64,
     event: &SessionEvent,
 ) -> Result<i64> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let out = append_in(&tx, session_id, at_ms, event)?;
+    tx.commit()?;
+    Ok(out)
+}
+
+/// [`append`] inside a transaction the caller owns (bundle import writes many
+/// sessions in one).
+pub(super) fn append_in(
+    tx: &Connection,
+    session_id: i64,
+    at_ms: i64,
+    event: &SessionEvent,
+) -> Result<i64> {
     match event {
         SessionEvent::Step { distance_m, .. } => {
             finite("step", &[("distance_m", *distance_m)])?;
@@ -199,7 +226,6 @@ pub(super) fn append(
         }
         _ => {}
     }
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
     let bid: i64 = tx
         .query_row(
             "SELECT building_id FROM survey_sessions WHERE id = ?1",
@@ -233,7 +259,7 @@ pub(super) fn append(
                 });
             }
         }
-        SessionEvent::Replan { plan_id } if !super::plans::belongs(&tx, *plan_id, bid)? => {
+        SessionEvent::Replan { plan_id } if !super::plans::belongs(tx, *plan_id, bid)? => {
             return Err(Error::Session {
                 session: session_id,
                 message: format!("replan to plan {plan_id}, which is not a plan of its building"),
@@ -285,7 +311,6 @@ pub(super) fn append(
             rd.execute(params![fid, ap_id, rss])?;
         }
     }
-    tx.commit()?;
     Ok(seq)
 }
 

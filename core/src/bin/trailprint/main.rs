@@ -12,15 +12,18 @@ use clap::{Parser, Subcommand};
 
 mod cmd_bench;
 mod cmd_buildings;
+mod cmd_bundle;
 mod cmd_delete;
 mod cmd_demo;
 mod cmd_evaluate;
+mod cmd_experiment;
 mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
 mod cmd_import;
 mod cmd_plan;
 mod cmd_render;
+mod cmd_simulate;
 mod cmd_team_plan;
 mod cmd_utility;
 mod opts;
@@ -54,6 +57,8 @@ enum Command {
     Generate(cmd_generate::Args),
     /// Localization error of a walk's fingerprint map (SPEC section 5).
     Evaluate(cmd_evaluate::Args),
+    /// The paper's evaluation: algorithms x budgets x runs, CSV and SVG charts.
+    Experiment(cmd_experiment::Args),
     /// Draw a building, a walk and the posterior uncertainty as SVG.
     Render(cmd_render::Args),
     /// Import a survey-building/1 file into the database.
@@ -64,12 +69,16 @@ enum Command {
     Export(cmd_export::Args),
     /// Delete a building and everything recorded for it.
     Delete(cmd_delete::Args),
+    /// Export or import survey bundles (several surveyors, offline merge).
+    Bundle(cmd_bundle::Args),
     /// Plan walks for several surveyors that complement each other.
     TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
     /// Benchmark the planners: algorithms x budgets x seeds, Markdown and CSV tables.
     Bench(cmd_bench::Args),
+    /// Plan a walk, then walk it as a survey session with a simulated surveyor.
+    Simulate(cmd_simulate::Args),
 }
 
 fn main() -> ExitCode {
@@ -78,10 +87,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(a) => cmd_demo::run(a, db),
         Command::TeamPlan(a) => cmd_team_plan::run(a, db),
+        Command::Bundle(a) => cmd_bundle::run(a, db),
         Command::Fit(a) => cmd_fit::run(a, db),
         Command::Utility(a) => cmd_utility::run(a, db),
         Command::Generate(a) => cmd_generate::run(a),
         Command::Evaluate(a) => cmd_evaluate::run(a, db),
+        Command::Experiment(a) => cmd_experiment::run(a, db),
         Command::Render(a) => cmd_render::run(a, db),
         Command::Import(a) => cmd_import::run(&a, db),
         Command::Buildings(a) => cmd_buildings::run(&a, db),
@@ -89,6 +100,7 @@ fn main() -> ExitCode {
         Command::Delete(a) => cmd_delete::run(&a, db),
         Command::Plan(a) => cmd_plan::run(a, db),
         Command::Bench(a) => cmd_bench::run(a),
+        Command::Simulate(a) => cmd_simulate::run(a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

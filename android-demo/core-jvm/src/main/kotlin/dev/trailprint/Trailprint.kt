@@ -1,0 +1,105 @@
+package dev.trailprint
+
+import dev.trailprint.ffi.BuildingMap
+import dev.trailprint.ffi.BuildingSummary
+import dev.trailprint.ffi.FitSummary
+import dev.trailprint.ffi.PlanListener
+import dev.trailprint.ffi.PlanProgress
+import dev.trailprint.ffi.PlanRequest
+import dev.trailprint.ffi.PlanSummary
+import dev.trailprint.ffi.SessionInfo
+import dev.trailprint.ffi.SessionOptions
+import dev.trailprint.ffi.SurveySession
+import dev.trailprint.ffi.SurveyorProfile
+import dev.trailprint.ffi.TrailprintStore
+import kotlinx.coroutines.CoroutineDispatcher
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.channels.awaitClose
+import kotlinx.coroutines.flow.Flow
+import kotlinx.coroutines.flow.callbackFlow
+import kotlinx.coroutines.launch
+import kotlinx.coroutines.withContext
+
+/** What a running plan reports: progress, then exactly one [Done] (or the flow fails). */
+sealed interface PlanEvent {
+    data class Progress(val progress: PlanProgress) : PlanEvent
+    data class Done(val plan: PlanSummary) : PlanEvent
+}
+
+/**
+ * The hand-written Kotlin face of Trailprint: suspend functions that run the (blocking)
+ * native calls on [io], and planning as a cold [Flow] of [PlanEvent]s whose cancellation
+ * cancels the native plan. Errors arrive as `TrailprintException` subclasses.
+ *
+ * One instance per database file; safe to share between view models.
+ */
+class Trailprint(
+    val store: TrailprintStore,
+    private val io: CoroutineDispatcher = Dispatchers.IO,
+) : AutoCloseable {
+    companion object {
+        /** Opens (or creates) the database at [path]. */
+        suspend fun open(path: String, io: CoroutineDispatcher = Dispatchers.IO): Trailprint =
+            withContext(io) { Trailprint(TrailprintStore.open(path), io) }
+
+        /** A database in memory (tests and previews). */
+        fun inMemory(io: CoroutineDispatcher = Dispatchers.IO): Trailprint = Trailprint(TrailprintStore.openInMemory(), io)
+    }
+
+    suspend fun importBuilding(json: String, origin: String, replace: Boolean = false): BuildingSummary =
+        withContext(io) { store.importBuildingJson(json, origin, replace) }
+
+    suspend fun importBuildingFile(path: String, replace: Boolean = false): BuildingSummary =
+        withContext(io) { store.importBuildingFile(path, replace) }
+
+    suspend fun buildings(): List<BuildingSummary> = withContext(io) { store.listBuildings() }
+
+    suspend fun map(buildingId: Long): BuildingMap = withContext(io) { store.buildingMap(buildingId) }
+
+    suspend fun deleteBuilding(buildingId: Long) = withContext(io) { store.deleteBuilding(buildingId) }
+
+    suspend fun fit(buildingId: Long): FitSummary = withContext(io) { store.fit(buildingId) }
+
+    suspend fun plans(buildingId: Long): List<PlanSummary> = withContext(io) { store.listPlans(buildingId) }
+
+    suspend fun plan(planId: Long): PlanSummary = withContext(io) { store.getPlan(planId) }
+
+    /**
+     * Plans [request]: progress events while it runs, then [PlanEvent.Done] with the saved
+     * plan. Cancelling the collector cancels the native planner (it stops within one of
+     * its progress checks).
+     */
+    fun plan(request: PlanRequest): Flow<PlanEvent> = callbackFlow {
+        val job = store.newPlan(request)
+        val listener = object : PlanListener {
+            override fun onProgress(progress: PlanProgress) {
+                trySend(PlanEvent.Progress(progress))
+            }
+        }
+        launch(io) {
+            try {
+                val result = job.run(listener)
+                send(PlanEvent.Done(result))
+                close()
+            } catch (e: Exception) {
+                close(e)
+            }
+        }
+        awaitClose {
+            job.cancel()
+            // Safe while run() is still going: the native object lives until that call returns.
+            job.close()
+        }
+    }
+
+    /** Starts a survey session on a saved plan. */
+    suspend fun startSession(planId: Long, surveyor: SurveyorProfile, options: SessionOptions? = null): SurveySession =
+        withContext(io) { store.startSession(planId, surveyor, options) }
+
+    /** Reopens a stored session where its log ends. */
+    suspend fun resumeSession(sessionId: Long): SurveySession = withContext(io) { store.resumeSession(sessionId) }
+
+    suspend fun sessions(buildingId: Long): List<SessionInfo> = withContext(io) { store.listSessions(buildingId) }
+
+    override fun close() = store.close()
+}

@@ -1,0 +1,139 @@
+package dev.trailprint.ui
+
+import dev.trailprint.PlanEvent
+import dev.trailprint.Trailprint
+import dev.trailprint.ffi.BuildingMap
+import dev.trailprint.ffi.PlanAlgorithm
+import dev.trailprint.ffi.PlanProgress
+import dev.trailprint.ffi.PlanRequest
+import dev.trailprint.ffi.PlanSummary
+import dev.trailprint.ffi.SurveyorProfile
+import dev.trailprint.ffi.TrailprintException
+import dev.trailprint.ffi.defaultHumanProfile
+import dev.trailprint.ffi.defaultRobotProfile
+import kotlinx.coroutines.CancellationException
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Job
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.flow.StateFlow
+import kotlinx.coroutines.flow.asStateFlow
+import kotlinx.coroutines.flow.update
+import kotlinx.coroutines.launch
+
+enum class BudgetUnit { METRES, MINUTES }
+
+enum class Profile { HUMAN, ROBOT }
+
+/** The plan screen. */
+data class PlanState(
+    val map: BuildingMap? = null,
+    val start: String? = null,
+    val end: String? = null,
+    val budget: Double = 60.0,
+    val unit: BudgetUnit = BudgetUnit.METRES,
+    val profile: Profile = Profile.HUMAN,
+    val human: SurveyorProfile.Human = defaultHumanProfile() as SurveyorProfile.Human,
+    val robot: SurveyorProfile.Robot = defaultRobotProfile() as SurveyorProfile.Robot,
+    val algorithm: PlanAlgorithm = PlanAlgorithm.AUTO,
+    val planning: Boolean = false,
+    val progress: PlanProgress? = null,
+    val result: PlanSummary? = null,
+    val error: String? = null,
+) {
+    val surveyor: SurveyorProfile get() = if (profile == Profile.HUMAN) human else robot
+
+    /** Walking (driving) speed, m/s: the robot's is assumed 0.5 m/s for a budget in minutes. */
+    val speedMps: Double get() = if (profile == Profile.HUMAN) human.speedMps else ROBOT_SPEED_MPS
+
+    /** The budget in metres (minutes times speed). */
+    val budgetMetres: Double get() = if (unit == BudgetUnit.METRES) budget else budget * 60.0 * speedMps
+
+    val canPlan: Boolean get() = map != null && start != null && end != null && budget > 0 && !planning
+
+    companion object {
+        const val ROBOT_SPEED_MPS = 0.5
+    }
+}
+
+/**
+ * State of the plan screen: pick start and end on the map (the first tap sets the start,
+ * the second the end, a third starts over), budget in metres or minutes, surveyor
+ * profile, algorithm; plan with progress and cancel.
+ */
+class PlanModel(
+    private val api: Trailprint,
+    private val scope: CoroutineScope,
+    val buildingId: Long,
+    private val seed: ULong = 1u,
+) {
+    private val _state = MutableStateFlow(PlanState())
+    val state: StateFlow<PlanState> = _state.asStateFlow()
+    private var planJob: Job? = null
+
+    fun load() = scope.launch {
+        try {
+            val map = api.map(buildingId)
+            _state.update { it.copy(map = map) }
+        } catch (e: TrailprintException) {
+            _state.update { it.copy(error = e.message) }
+        }
+    }
+
+    /** A tap on vertex [id]. */
+    fun tapVertex(id: String) = _state.update {
+        when {
+            it.start == null -> it.copy(start = id, result = null)
+            it.end == null -> it.copy(end = id, result = null)
+            else -> it.copy(start = id, end = null, result = null)
+        }
+    }
+
+    fun setBudget(value: Double) = _state.update { it.copy(budget = value) }
+
+    /** Switches the unit, converting the number so the budget stays the same. */
+    fun setUnit(unit: BudgetUnit) = _state.update {
+        if (unit == it.unit) it
+        else {
+            val metres = it.budgetMetres
+            it.copy(unit = unit, budget = if (unit == BudgetUnit.METRES) metres else metres / 60.0 / it.speedMps)
+        }
+    }
+
+    fun setProfile(profile: Profile) = _state.update { it.copy(profile = profile) }
+
+    fun setHuman(human: SurveyorProfile.Human) = _state.update { it.copy(human = human) }
+
+    fun setAlgorithm(algorithm: PlanAlgorithm) = _state.update { it.copy(algorithm = algorithm) }
+
+    fun plan(timeLimitS: Double? = null) {
+        val s = _state.value
+        if (!s.canPlan) return
+        val request = PlanRequest(buildingId, s.start!!, s.end!!, s.budgetMetres, s.surveyor, s.algorithm, seed, timeLimitS)
+        _state.update { it.copy(planning = true, progress = null, result = null, error = null) }
+        planJob = scope.launch {
+            try {
+                api.plan(request).collect { ev ->
+                    when (ev) {
+                        is PlanEvent.Progress -> _state.update { it.copy(progress = ev.progress) }
+                        is PlanEvent.Done -> _state.update { it.copy(result = ev.plan) }
+                    }
+                }
+            } catch (e: TrailprintException.Cancelled) {
+                // The user cancelled: nothing to show.
+            } catch (e: TrailprintException) {
+                _state.update { it.copy(error = e.message) }
+            } catch (e: CancellationException) {
+                throw e
+            } finally {
+                _state.update { it.copy(planning = false) }
+            }
+        }
+    }
+
+    /** Cancels a running plan (the native planner stops). */
+    fun cancel() {
+        planJob?.cancel()
+    }
+
+    fun dismissError() = _state.update { it.copy(error = null) }
+}

@@ -1,0 +1,177 @@
+package dev.trailprint
+
+import dev.trailprint.ffi.PlanAlgorithm
+import dev.trailprint.ffi.PlanListener
+import dev.trailprint.ffi.PlanProgress
+import dev.trailprint.ffi.PlanRequest
+import dev.trailprint.ffi.TrailprintException
+import dev.trailprint.ffi.TrailprintStore
+import dev.trailprint.ffi.defaultHumanProfile
+import dev.trailprint.ffi.defaultRobotProfile
+import dev.trailprint.testing.TestData
+import dev.trailprint.ui.BudgetUnit
+import dev.trailprint.ui.PlanModel
+import dev.trailprint.ui.Profile
+import java.io.File
+import java.nio.file.Files
+import java.util.concurrent.CopyOnWriteArrayList
+import java.util.concurrent.CountDownLatch
+import java.util.concurrent.TimeUnit
+import kotlin.concurrent.thread
+import kotlin.test.AfterTest
+import kotlin.test.Test
+import kotlin.test.assertEquals
+import kotlin.test.assertFailsWith
+import kotlin.test.assertIs
+import kotlin.test.assertNotNull
+import kotlin.test.assertNull
+import kotlin.test.assertTrue
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.flow.toList
+import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
+
+class PlanTest {
+    private val dir: File = Files.createTempDirectory("trailprint-plan-test").toFile()
+
+    @AfterTest
+    fun cleanUp() {
+        dir.deleteRecursively()
+    }
+
+    private fun storeWithDemo(path: String? = null): Pair<TrailprintStore, Long> {
+        val store = if (path == null) TrailprintStore.openInMemory() else TrailprintStore.open(path)
+        val b = store.importBuildingJson(TestData.demoBuildingJson, "demo-building.json", false)
+        return store to b.id
+    }
+
+    private fun request(buildingId: Long, budget: Double, algorithm: PlanAlgorithm = PlanAlgorithm.GREEDY, end: String = "c20", timeLimit: Double? = null) =
+        PlanRequest(buildingId, "c00", end, budget, defaultRobotProfile(), algorithm, 7uL, timeLimit)
+
+    @Test
+    fun plansWithinBudgetReportsProgressAndSavesThePlan() {
+        val db = File(dir, "p.db").path
+        val (store, bid) = storeWithDemo(db)
+        val reports = CopyOnWriteArrayList<PlanProgress>()
+        val plan = store.use {
+            it.newPlan(request(bid, 60.0, PlanAlgorithm.GENETIC)).use { job ->
+                job.run(object : PlanListener {
+                    override fun onProgress(progress: PlanProgress) {
+                        reports += progress
+                    }
+                })
+            }
+        }
+        assertEquals("c00", plan.walk.first())
+        assertEquals("c20", plan.walk.last())
+        assertTrue(plan.lengthM <= 60.0 + 1e-9 && plan.lengthM >= 30.0, "length ${plan.lengthM}")
+        assertTrue(plan.utilityNats > 0)
+        assertEquals("genetic", plan.algorithm)
+        assertTrue(reports.isNotEmpty(), "no progress reported")
+        assertTrue(reports.all { it.fraction in 0.0..1.0 })
+        // A fresh store object on the same file sees the plan.
+        TrailprintStore.open(db).use { again ->
+            val listed = again.listPlans(bid)
+            assertEquals(listOf(plan.id), listed.map { it.id })
+            assertEquals(plan.walk, again.getPlan(plan.id).walk)
+            assertEquals(defaultRobotProfile(), listed[0].surveyor)
+        }
+    }
+
+    @Test
+    fun cancelsALongPlanFromAnotherThread() {
+        val (store, bid) = storeWithDemo()
+        store.use {
+            val job = it.newPlan(request(bid, 400.0, PlanAlgorithm.EXACT, end = "c00"))
+            val started = CountDownLatch(1)
+            thread(name = "canceller") {
+                started.await(30, TimeUnit.SECONDS)
+                Thread.sleep(200)
+                job.cancel()
+            }
+            val t0 = System.nanoTime()
+            val e = assertFailsWith<TrailprintException.Cancelled> {
+                job.run(object : PlanListener {
+                    override fun onProgress(progress: PlanProgress) = started.countDown()
+                })
+            }
+            val ms = (System.nanoTime() - t0) / 1_000_000
+            assertTrue(job.isCancelled())
+            assertTrue(ms < 20_000, "cancel took $ms ms")
+            assertTrue("cancel" in e.message!!, e.message)
+            assertTrue(it.listPlans(bid).isEmpty(), "a cancelled plan must not be saved")
+            job.close()
+        }
+    }
+
+    @Test
+    fun aBudgetBelowTheShortestWalkIsUnreachableNamingTheShortest() {
+        val (store, bid) = storeWithDemo()
+        store.use {
+            val e = assertFailsWith<TrailprintException.Unreachable> { it.newPlan(request(bid, 10.0)).run(null) }
+            assertTrue("c00" in e.message!! && "c20" in e.message!! && "30.000" in e.message!!, e.message)
+        }
+    }
+
+    @Test
+    fun anUnknownVertexIsAnInvalidRequest() {
+        val (store, bid) = storeWithDemo()
+        store.use {
+            val e = assertFailsWith<TrailprintException.InvalidRequest> { it.newPlan(request(bid, 50.0, end = "nowhere")).run(null) }
+            assertTrue("nowhere" in e.message!!, e.message)
+        }
+    }
+
+    @Test
+    fun aPlanCallRunsOnce() {
+        val (store, bid) = storeWithDemo()
+        store.use {
+            val job = it.newPlan(request(bid, 40.0))
+            job.run(null)
+            assertFailsWith<TrailprintException.InvalidRequest> { job.run(null) }
+        }
+    }
+
+    @Test
+    fun theFacadeFlowEndsWithDoneAndCancellingItCancelsThePlanner() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
+            val events = withTimeout(60_000) { api.plan(request(bid, 50.0)).toList() }
+            assertIs<PlanEvent.Done>(events.last())
+            // Take the first progress event of an endless exact search, then stop collecting.
+            val first = withTimeout(60_000) { api.plan(request(bid, 400.0, PlanAlgorithm.EXACT, end = "c00")).first() }
+            assertIs<PlanEvent.Progress>(first)
+            assertEquals(1, api.plans(bid).size)
+        }
+    }
+
+    @Test
+    fun thePlanModelConvertsMinutesAndPlans() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
+            val model = PlanModel(api, this, bid)
+            model.load().join()
+            assertNotNull(model.state.value.map)
+            model.tapVertex("c00")
+            model.tapVertex("c20")
+            model.setProfile(Profile.HUMAN)
+            model.setBudget(50.0)
+            model.setUnit(BudgetUnit.MINUTES)
+            // 50 m at 1.2 m/s is 0.694 minutes.
+            assertEquals(50.0 / 60.0 / 1.2, model.state.value.budget, 1e-9)
+            model.setAlgorithm(PlanAlgorithm.GREEDY)
+            model.plan()
+            val done = withTimeout(60_000) { model.state.first { !it.planning && (it.result != null || it.error != null) } }
+            assertNull(done.error)
+            assertTrue(done.result!!.lengthM <= 50.0 + 1e-6)
+            assertEquals(defaultHumanProfile().let { (it as dev.trailprint.ffi.SurveyorProfile.Human).scanIntervalS }, (done.result!!.surveyor as dev.trailprint.ffi.SurveyorProfile.Human).scanIntervalS)
+            // Unreachable budget: the error message, no result.
+            model.setUnit(BudgetUnit.METRES)
+            model.setBudget(5.0)
+            model.plan()
+            val failed = withTimeout(60_000) { model.state.first { !it.planning && it.error != null } }
+            assertTrue("fits the budget" in failed.error!!, failed.error)
+        }
+    }
+}

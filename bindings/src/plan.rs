@@ -1,0 +1,211 @@
+//! Planning: the request and result records, the progress listener (implemented in
+//! Kotlin) and the planning call object, which another thread may cancel.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+
+use trailprint::plan::{self, Algorithm, Control, Observer, Progress};
+use trailprint::store::{self as core_store, PlanRecord};
+
+use crate::model::SurveyorProfile;
+use crate::store::{PlanSummary, TrailprintStore};
+use crate::{Result, TrailprintError};
+
+/// The planning algorithms (`auto` is the recommended default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Enum)]
+pub enum PlanAlgorithm {
+    Auto,
+    Greedy,
+    Genetic,
+    RecursiveGreedy,
+    Ero,
+    Exact,
+}
+
+impl From<PlanAlgorithm> for Algorithm {
+    fn from(a: PlanAlgorithm) -> Self {
+        match a {
+            PlanAlgorithm::Auto => Algorithm::Auto,
+            PlanAlgorithm::Greedy => Algorithm::Greedy,
+            PlanAlgorithm::Genetic => Algorithm::Genetic,
+            PlanAlgorithm::RecursiveGreedy => Algorithm::RecursiveGreedy,
+            PlanAlgorithm::Ero => Algorithm::Ero,
+            PlanAlgorithm::Exact => Algorithm::Exact,
+        }
+    }
+}
+
+impl From<Algorithm> for PlanAlgorithm {
+    fn from(a: Algorithm) -> Self {
+        match a {
+            Algorithm::Auto => PlanAlgorithm::Auto,
+            Algorithm::Greedy => PlanAlgorithm::Greedy,
+            Algorithm::Genetic => PlanAlgorithm::Genetic,
+            Algorithm::RecursiveGreedy => PlanAlgorithm::RecursiveGreedy,
+            Algorithm::Ero => PlanAlgorithm::Ero,
+            Algorithm::Exact => PlanAlgorithm::Exact,
+        }
+    }
+}
+
+/// What to plan: a walk of a stored building from `start` to `end` within `budget_m`.
+#[derive(Debug, Clone, uniffi::Record)]
+pub struct PlanRequest {
+    pub building_id: i64,
+    /// Start vertex id.
+    pub start: String,
+    /// End vertex id (may equal the start).
+    pub end: String,
+    /// Distance budget, metres (the app converts minutes with the walking speed).
+    pub budget_m: f64,
+    pub surveyor: SurveyorProfile,
+    pub algorithm: PlanAlgorithm,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Stop with the best walk so far after this many seconds (null: the algorithm's
+    /// default, 2 s for `auto`, none for the others).
+    pub time_limit_s: Option<f64>,
+}
+
+/// A progress report of a running plan.
+#[derive(Debug, Clone, uniffi::Record)]
+pub struct PlanProgress {
+    pub algorithm: PlanAlgorithm,
+    /// Estimated fraction of the work done, 0 to 1.
+    pub fraction: f64,
+    /// Utility of the best walk so far, nats.
+    pub best_utility_nats: Option<f64>,
+    /// A short note (`generation 3/5`).
+    pub message: String,
+}
+
+impl From<&Progress> for PlanProgress {
+    fn from(p: &Progress) -> Self {
+        PlanProgress {
+            algorithm: p.algorithm.into(),
+            fraction: p.fraction,
+            best_utility_nats: p.best_utility,
+            message: p.message.clone(),
+        }
+    }
+}
+
+/// Receives progress reports while a plan runs. Called on the planning thread (or a worker
+/// thread): keep it cheap, and hop to the UI thread yourself.
+#[uniffi::export(with_foreign)]
+pub trait PlanListener: Send + Sync {
+    fn on_progress(&self, progress: PlanProgress);
+}
+
+struct ListenerObserver(Arc<dyn PlanListener>);
+
+impl Observer for ListenerObserver {
+    fn progress(&self, p: &Progress) {
+        self.0.on_progress(p.into());
+    }
+}
+
+/// One planning call: made by [`TrailprintStore::new_plan`], run once with
+/// [`PlanJob::run`] (blocking; call it off the main thread), cancelled from any thread
+/// with [`PlanJob::cancel`], which makes `run` fail with `Cancelled`.
+#[derive(uniffi::Object)]
+pub struct PlanJob {
+    store: Arc<TrailprintStore>,
+    request: PlanRequest,
+    cancel: Arc<AtomicBool>,
+    ran: Mutex<bool>,
+}
+
+impl PlanJob {
+    pub(crate) fn new(store: Arc<TrailprintStore>, request: PlanRequest) -> Self {
+        PlanJob {
+            store,
+            request,
+            cancel: Arc::new(AtomicBool::new(false)),
+            ran: Mutex::new(false),
+        }
+    }
+}
+
+#[uniffi::export]
+impl PlanJob {
+    /// The request this call plans.
+    pub fn request(&self) -> PlanRequest {
+        self.request.clone()
+    }
+
+    /// Plans, reporting progress to `listener`, and saves the plan in the store. Fails
+    /// with `Cancelled` after [`cancel`](Self::cancel), and with `InvalidRequest` when run
+    /// a second time.
+    pub fn run(&self, listener: Option<Arc<dyn PlanListener>>) -> Result<PlanSummary> {
+        {
+            let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
+            if *ran {
+                return Err(TrailprintError::InvalidRequest(
+                    "this plan call has already run; make a new one".into(),
+                ));
+            }
+            *ran = true;
+        }
+        let mut control = Control::new().with_cancel_token(self.cancel.clone());
+        if let Some(l) = listener {
+            control = control.with_observer(Arc::new(ListenerObserver(l)));
+        }
+        self.store.run_plan(&self.request, &control)
+    }
+
+    /// Asks the running (or future) `run` to stop; safe from any thread, idempotent.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::SeqCst);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::SeqCst)
+    }
+}
+
+/// Builds the core request (kernel chosen by the store).
+pub(crate) fn core_request(
+    r: &PlanRequest,
+    kernel: trailprint::gp::Kernel,
+) -> Result<plan::PlanRequest> {
+    let mut req = plan::PlanRequest::new(&r.start, &r.end, r.budget_m, kernel);
+    req.model = r.surveyor.into();
+    req.algorithm = r.algorithm.into();
+    req.seed = r.seed;
+    req.time_limit = match r.time_limit_s {
+        None => None,
+        Some(s) if s.is_finite() && s > 0.0 => Some(std::time::Duration::from_secs_f64(s)),
+        Some(s) => {
+            return Err(TrailprintError::InvalidRequest(format!(
+                "time limit must be a positive number of seconds, got {s}"
+            )));
+        }
+    };
+    Ok(req)
+}
+
+impl TrailprintStore {
+    /// Plans and saves (the body of [`PlanJob::run`]).
+    pub(crate) fn run_plan(
+        &self,
+        r: &PlanRequest,
+        control: &trailprint::plan::Control,
+    ) -> Result<PlanSummary> {
+        let building = Arc::new(self.inner.get_building(r.building_id)?);
+        let kernel = self.kernel_for(r.building_id)?;
+        let req = core_request(r, kernel)?;
+        let res = trailprint::plan::plan(building, &req, control)?;
+        let record = PlanRecord::from_plan(&req, &res, core_store::now_ms());
+        let id = self.inner.save_plan(r.building_id, &record)?;
+        Ok(self.inner.load_plan(id)?.into())
+    }
+}
+
+#[uniffi::export]
+impl TrailprintStore {
+    /// A planning call for `request`, to run with [`PlanJob::run`].
+    pub fn new_plan(self: Arc<Self>, request: PlanRequest) -> Arc<PlanJob> {
+        Arc::new(PlanJob::new(self, request))
+    }
+}

@@ -1,0 +1,227 @@
+//! The store object: one SQLite database of buildings, fits, plans and survey sessions.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use trailprint::Building;
+use trailprint::store::{self, BuildingInfo, FitRecord, ImportOptions, Store};
+
+use crate::building::{BuildingMap, KernelParams};
+use crate::model::FitSummary;
+use crate::model::SurveyorProfile;
+use crate::Result;
+
+/// A stored building's summary.
+#[derive(Debug, Clone, uniffi::Record)]
+pub struct BuildingSummary {
+    pub id: i64,
+    pub name: String,
+    /// Where it was imported from (file name or origin).
+    pub source: Option<String>,
+    pub imported_ms: i64,
+    pub floors: u64,
+    pub vertices: u64,
+    pub edges: u64,
+    pub access_points: u64,
+    pub pilot: u64,
+    /// Whether the building file gave a kernel (else it is fitted on the pilot data).
+    pub has_kernel: bool,
+    pub fits: u64,
+    pub plans: u64,
+    pub sessions: u64,
+    /// Fingerprints collected in its sessions.
+    pub collected: u64,
+}
+
+impl From<BuildingInfo> for BuildingSummary {
+    fn from(b: BuildingInfo) -> Self {
+        BuildingSummary {
+            id: b.id,
+            name: b.name,
+            source: b.source,
+            imported_ms: b.imported_ms,
+            floors: b.floors,
+            vertices: b.vertices,
+            edges: b.edges,
+            access_points: b.access_points,
+            pilot: b.pilot,
+            has_kernel: b.has_kernel,
+            fits: b.fits,
+            plans: b.plans,
+            sessions: b.sessions,
+            collected: b.collected,
+        }
+    }
+}
+
+/// A saved plan.
+#[derive(Debug, Clone, uniffi::Record)]
+pub struct PlanSummary {
+    pub id: i64,
+    pub building_id: i64,
+    pub start: String,
+    pub end: String,
+    pub algorithm: String,
+    /// Vertex ids from start to end.
+    pub walk: Vec<String>,
+    pub length_m: f64,
+    pub budget_m: f64,
+    pub samples: u64,
+    pub utility_nats: f64,
+    pub elapsed_ms: u64,
+    pub seed: Option<u64>,
+    pub kernel: KernelParams,
+    /// The surveyor model the plan was made for (null if the store holds one this version
+    /// cannot read).
+    pub surveyor: Option<SurveyorProfile>,
+    pub created_ms: i64,
+}
+
+impl From<trailprint::store::StoredPlan> for PlanSummary {
+    fn from(p: trailprint::store::StoredPlan) -> Self {
+        let r = p.record;
+        PlanSummary {
+            id: p.id,
+            building_id: p.building_id,
+            surveyor: serde_json::from_value::<trailprint::samples::SurveyorModel>(r.surveyor)
+                .ok()
+                .map(Into::into),
+            start: r.start,
+            end: r.end,
+            algorithm: r.algorithm,
+            walk: r.walk,
+            length_m: r.length_m,
+            budget_m: r.budget_m,
+            samples: r.samples,
+            utility_nats: r.utility_nats,
+            elapsed_ms: r.elapsed_ms,
+            seed: r.seed,
+            kernel: r.kernel.into(),
+            created_ms: r.created_ms,
+        }
+    }
+}
+
+/// The database: open it once per file and share it; every method may be called from any
+/// thread (the core serialises writes on one connection).
+#[derive(uniffi::Object)]
+pub struct TrailprintStore {
+    pub(crate) inner: Arc<Store>,
+}
+
+impl TrailprintStore {
+    /// The kernel to plan with: the building file's, else the latest fit, else a new fit
+    /// (recorded).
+    pub(crate) fn kernel_for(&self, building_id: i64) -> Result<trailprint::gp::Kernel> {
+        let b = self.inner.get_building(building_id)?;
+        if let Some(k) = b.kernel {
+            return Ok(k);
+        }
+        if let Some(f) = self.inner.latest_fit(building_id)? {
+            return Ok(f.record.kernel);
+        }
+        Ok(self.fit_and_record(building_id, &b)?.kernel.into())
+    }
+
+    fn fit_and_record(&self, building_id: i64, b: &Building) -> Result<FitSummary> {
+        let fit = trailprint::gp::fit_kernel(&b.pilot)?;
+        self.inner
+            .record_fit(building_id, &FitRecord::from_fit(&fit, store::now_ms()))?;
+        Ok(fit.into())
+    }
+}
+
+#[uniffi::export]
+impl TrailprintStore {
+    /// Opens (or creates) the database file at `path`, upgrading its schema.
+    #[uniffi::constructor]
+    pub fn open(path: String) -> Result<Arc<Self>> {
+        Ok(Arc::new(TrailprintStore {
+            inner: Arc::new(Store::open(&path)?),
+        }))
+    }
+
+    /// A fresh database in memory (tests, previews).
+    #[uniffi::constructor]
+    pub fn open_in_memory() -> Result<Arc<Self>> {
+        Ok(Arc::new(TrailprintStore {
+            inner: Arc::new(Store::open_in_memory()?),
+        }))
+    }
+
+    /// Imports `survey-building/1` JSON text; `origin` names it in errors and is kept as
+    /// its source. A building of the same name is replaced when `replace`, else an error.
+    pub fn import_building_json(
+        &self,
+        json: String,
+        origin: String,
+        replace: bool,
+    ) -> Result<BuildingSummary> {
+        let opts = ImportOptions {
+            replace,
+            ..Default::default()
+        };
+        let report = self.inner.import_json(&json, &origin, &opts)?;
+        Ok(self.inner.building_info(report.id)?.into())
+    }
+
+    /// Imports a building file.
+    pub fn import_building_file(&self, path: String, replace: bool) -> Result<BuildingSummary> {
+        let text = store::read_import_text(Path::new(&path))?;
+        self.import_building_json(text, path, replace)
+    }
+
+    /// Every building, by name.
+    pub fn list_buildings(&self) -> Result<Vec<BuildingSummary>> {
+        Ok(self
+            .inner
+            .list_buildings()?
+            .into_iter()
+            .map(Into::into)
+            .collect())
+    }
+
+    /// A building's geometry for the map.
+    pub fn building_map(&self, building_id: i64) -> Result<BuildingMap> {
+        Ok(BuildingMap::from(&self.inner.get_building(building_id)?))
+    }
+
+    /// Deletes a building with its fits, plans and sessions.
+    pub fn delete_building(&self, building_id: i64) -> Result<()> {
+        self.inner.delete_building(building_id)?;
+        Ok(())
+    }
+
+    /// Fits the kernel on the building's pilot data and records the fit.
+    pub fn fit(&self, building_id: i64) -> Result<FitSummary> {
+        let b = self.inner.get_building(building_id)?;
+        self.fit_and_record(building_id, &b)
+    }
+
+    /// The kernel plans of this building use: the file's, else the latest fit, else null.
+    pub fn kernel(&self, building_id: i64) -> Result<Option<KernelParams>> {
+        let b = self.inner.get_building(building_id)?;
+        if let Some(k) = b.kernel {
+            return Ok(Some(k.into()));
+        }
+        Ok(self
+            .inner
+            .latest_fit(building_id)?
+            .map(|f| f.record.kernel.into()))
+    }
+
+    /// The plans of a building, oldest first.
+    pub fn list_plans(&self, building_id: i64) -> Result<Vec<PlanSummary>> {
+        Ok(self
+            .inner
+            .list_plans(building_id)?
+            .into_iter()
+            .map(Into::into)
+            .collect())
+    }
+
+    /// One plan.
+    pub fn get_plan(&self, plan_id: i64) -> Result<PlanSummary> {
+        Ok(self.inner.load_plan(plan_id)?.into())
+    }
+}

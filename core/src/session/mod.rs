@@ -1,0 +1,591 @@
+//! Survey sessions: a surveyor walking a saved plan with a phone (or a robot), turned into
+//! positions, fingerprints, guidance, progress and replans.
+//!
+//! # Design
+//! * The state of a session is a pure function of its plan and its event log
+//!   ([`tracker::Tracker`]); resuming is replaying the log, which touches no numerics
+//!   beyond a label per scan, so it is fast. A replan is logged as an event naming the
+//!   saved plan it switched to, so replay never plans again.
+//! * [`Session::record`] checks an event against the state, writes it to the log and only
+//!   then applies it and acknowledges it ([`Ack`]): a rejected event writes nothing, and an
+//!   acknowledged one survives a kill.
+//! * Storage is behind the small [`SessionLog`] trait ([`MemoryLog`] in memory, the SQLite
+//!   store for the app); replanning is behind [`Replanner`] ([`GreedyReplanner`] built in).
+//! * Threading: a `Session` is `Send` but used from one thread at a time; the bindings wrap
+//!   it in a mutex.
+//!
+//! # Example
+//! ```
+//! use std::sync::Arc;
+//! use trailprint::session::{Event, MemoryLog, PlanData, Session, SessionOptions, SessionLog, Surveyor};
+//! use trailprint::{Building, gp::Kernel};
+//!
+//! let b = Building::from_json(r#"{"format":"survey-building/1","name":"L",
+//!   "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":4,"y":0},{"id":"c","x":4,"y":4}],
+//!   "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"}]}"#, "doc")?;
+//! let log = Arc::new(MemoryLog::new());
+//! let bid = log.add_building(Arc::new(b));
+//! let plan = log.save_plan(&PlanData::for_walk(bid, &["a", "b", "c"], 10.0, Kernel::new(20.0, 5.0, 2.0), 8.0))?;
+//! let mut s = Session::start(log, plan, Surveyor::human(), SessionOptions::default())?;
+//! assert_eq!(s.guidance().next_vertex.as_deref(), Some("b"));
+//! for t in 0..6 {
+//!     s.record(Event::Step { t_ms: 1000 * t, steps: 1 })?;
+//! }
+//! let ack = s.record(Event::CheckIn { t_ms: 7000, vertex: "b".into() })?;
+//! assert!(!ack.off_route);
+//! assert!((s.progress()?.step_length_m - (20.0 * 0.7 + 4.0) / 25.5).abs() < 1e-12);
+//! # Ok::<(), trailprint::Error>(())
+//! ```
+
+pub mod log;
+pub mod replan;
+pub mod sim;
+mod store_log;
+pub mod tracker;
+pub mod types;
+
+#[cfg(test)]
+mod tests;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+pub use log::{LogEntry, LogEvent, MemoryLog, PlanData, SessionLog, SessionRow};
+pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
+pub use tracker::Tracker;
+pub use types::*;
+
+use crate::building::Building;
+use crate::gp::predict::GpModel;
+use crate::gp::{Kernel, Point};
+use crate::samples::sample_walk;
+use crate::utility::UtilityEngine;
+use crate::{Error, Result};
+
+/// What the session row keeps besides the plan: who walks and how the session reacts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SessionSettings {
+    pub surveyor: Surveyor,
+    #[serde(default)]
+    pub options: SessionOptions,
+}
+
+/// Milliseconds since the Unix epoch now.
+fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
+}
+
+impl PlanData {
+    /// A plan record for a walk given by ids (for tests and tools; figures left at zero
+    /// except the ones given).
+    pub fn for_walk(
+        building_id: i64,
+        walk: &[&str],
+        budget_m: f64,
+        kernel: Kernel,
+        length_m: f64,
+    ) -> Self {
+        PlanData {
+            building_id,
+            start: walk.first().map(|s| s.to_string()).unwrap_or_default(),
+            end: walk.last().map(|s| s.to_string()).unwrap_or_default(),
+            budget_m,
+            surveyor: serde_json::Value::Null,
+            kernel,
+            algorithm: "given".into(),
+            seed: None,
+            walk: walk.iter().map(|s| s.to_string()).collect(),
+            length_m,
+            samples: 0,
+            utility_nats: 0.0,
+            elapsed_ms: 0,
+            created_ms: 0,
+        }
+    }
+}
+
+/// A survey session (see the module documentation).
+pub struct Session {
+    log: Arc<dyn SessionLog>,
+    replanner: Arc<dyn Replanner>,
+    id: i64,
+    building_id: i64,
+    plan_id: i64,
+    building: Arc<Building>,
+    kernel: Kernel,
+    tracker: Tracker,
+    /// Pilot data only, with the session's surveyor model.
+    engine: UtilityEngine,
+    planned_utility: f64,
+    last_replan_error: Option<String>,
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("id", &self.id)
+            .field("plan_id", &self.plan_id)
+            .field("status", &self.tracker.status())
+            .field("last_seq", &self.tracker.last_seq())
+            .finish()
+    }
+}
+
+impl Session {
+    /// Starts a new session on the saved plan `plan_id`.
+    pub fn start(
+        log: Arc<dyn SessionLog>,
+        plan_id: i64,
+        surveyor: Surveyor,
+        options: SessionOptions,
+    ) -> Result<Session> {
+        surveyor.validate()?;
+        options.validate()?;
+        let plan = log.load_plan(plan_id)?;
+        let settings = SessionSettings { surveyor, options };
+        let value = serde_json::to_value(settings)
+            .map_err(|e| Error::InvalidRequest(format!("session settings: {e}")))?;
+        // Open first so that a plan the session cannot walk creates no row.
+        let mut s = Self::open(log.clone(), 0, plan_id, &plan, settings)?;
+        let id = log.create_session(plan.building_id, plan_id, &value, now_ms())?;
+        s.id = id;
+        s.tracker = Tracker::new(
+            id,
+            &s.building,
+            surveyor,
+            options,
+            s.kernel,
+            plan.budget_m,
+            s.tracker.route().to_vec(),
+        )?;
+        Ok(s)
+    }
+
+    /// Resumes a session from its log: replays every event, then finishes an automatic
+    /// replan that a kill interrupted.
+    pub fn resume(log: Arc<dyn SessionLog>, session_id: i64) -> Result<Session> {
+        let mut s = Self::replay_to(log, session_id, i64::MAX)?;
+        s.finish_due_replan();
+        Ok(s)
+    }
+
+    /// The session as it was right after event `seq` (replayed; an automatic replan that a
+    /// kill interrupted is not finished, so nothing is written).
+    pub fn replay_to(log: Arc<dyn SessionLog>, session_id: i64, seq: i64) -> Result<Session> {
+        let row = log.session(session_id)?;
+        let settings: SessionSettings =
+            serde_json::from_value(row.settings.clone()).map_err(|e| Error::Session {
+                session: session_id,
+                message: format!("stored settings cannot be read: {e}"),
+            })?;
+        let plan = log.load_plan(row.plan_id)?;
+        let mut s = Self::open(log.clone(), session_id, row.plan_id, &plan, settings)?;
+        for entry in log.events(session_id)?.iter().take_while(|e| e.seq <= seq) {
+            s.replay(entry)?;
+        }
+        Ok(s)
+    }
+
+    fn open(
+        log: Arc<dyn SessionLog>,
+        id: i64,
+        plan_id: i64,
+        plan: &PlanData,
+        settings: SessionSettings,
+    ) -> Result<Session> {
+        let building = log.building(plan.building_id)?;
+        let walk = building.resolve_walk(&plan.walk)?;
+        let kernel = plan.kernel;
+        let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor.model())?;
+        let planned_utility = engine.utility(&walk)?;
+        let tracker = Tracker::new(
+            id,
+            &building,
+            settings.surveyor,
+            settings.options,
+            kernel,
+            plan.budget_m,
+            walk,
+        )?;
+        Ok(Session {
+            log,
+            replanner: Arc::new(GreedyReplanner),
+            id,
+            building_id: plan.building_id,
+            plan_id,
+            building,
+            kernel,
+            tracker,
+            engine,
+            planned_utility,
+            last_replan_error: None,
+        })
+    }
+
+    /// Uses another planner for replans.
+    pub fn set_replanner(&mut self, replanner: Arc<dyn Replanner>) {
+        self.replanner = replanner;
+    }
+
+    fn replay(&mut self, entry: &LogEntry) -> Result<()> {
+        let b = self.building.clone();
+        let expect = self.tracker.last_seq() + 1;
+        if entry.seq != expect {
+            return Err(Error::Session {
+                session: self.id,
+                message: format!("log gap: expected event {expect}, found {}", entry.seq),
+            });
+        }
+        let bad = |e: Error| Error::Session {
+            session: self.id,
+            message: format!("event {} of the log cannot be replayed: {e}", entry.seq),
+        };
+        let t_ms = entry.t_ms;
+        let ev = match &entry.event {
+            LogEvent::Replan { plan_id } => {
+                let plan = self.log.load_plan(*plan_id)?;
+                let walk = b.resolve_walk(&plan.walk).map_err(bad)?;
+                return self.tracker.apply_replan(&b, &walk, entry.seq).map_err(bad);
+            }
+            LogEvent::Step { steps, .. } => Event::Step {
+                t_ms,
+                steps: *steps,
+            },
+            LogEvent::Scan { rss, .. } => Event::Scan {
+                t_ms,
+                readings: rss
+                    .iter()
+                    .map(|(k, &v)| Reading {
+                        bssid: k.clone(),
+                        rss_dbm: v,
+                    })
+                    .collect(),
+            },
+            LogEvent::CheckIn { vertex } => Event::CheckIn {
+                t_ms,
+                vertex: vertex.clone(),
+            },
+            LogEvent::Pose { x, y, floor } => Event::Pose {
+                t_ms,
+                x: *x,
+                y: *y,
+                floor: *floor,
+            },
+            LogEvent::Pause => Event::Pause { t_ms },
+            LogEvent::Resume => Event::Resume { t_ms },
+            LogEvent::Finish => Event::Finish { t_ms },
+            LogEvent::Abort { reason } => Event::Abort {
+                t_ms,
+                reason: reason.clone(),
+            },
+        };
+        self.tracker.check(&b, &ev).map_err(bad)?;
+        self.tracker.apply(&b, &ev, entry.seq);
+        Ok(())
+    }
+
+    fn finish_due_replan(&mut self) -> Option<i64> {
+        if !self.tracker.replan_due() {
+            return None;
+        }
+        match self.replan() {
+            Ok(o) => {
+                self.last_replan_error = None;
+                Some(o.seq)
+            }
+            Err(e) => {
+                self.last_replan_error = Some(e.to_string());
+                None
+            }
+        }
+    }
+
+    /// Records an event: checks it, writes it to the log, applies it, and replans if it took
+    /// the surveyor off-route and automatic replanning is on. A rejected event writes
+    /// nothing and changes nothing.
+    pub fn record(&mut self, event: Event) -> Result<Ack> {
+        let b = self.building.clone();
+        self.tracker.check(&b, &event)?;
+        let entry = self.tracker.log_event(&b, &event);
+        let seq = self.log.append(self.id, event.t_ms(), &entry)?;
+        let expect = self.tracker.last_seq() + 1;
+        let applied = self.tracker.apply(&b, &event, seq);
+        if seq != expect {
+            return Err(Error::Session {
+                session: self.id,
+                message: format!(
+                    "the log was written by someone else (event {seq} where {expect} was \
+                     expected): resume the session"
+                ),
+            });
+        }
+        let replan_seq = self.finish_due_replan();
+        Ok(Ack {
+            seq,
+            status: self.tracker.status(),
+            off_route: self.tracker.off_route(),
+            went_off_route: applied.went_off_route,
+            replan_seq,
+            replan_error: if replan_seq.is_none() {
+                self.last_replan_error.take()
+            } else {
+                None
+            },
+            sample: applied.sample,
+            position: self.tracker.position_plain(&b),
+        })
+    }
+
+    /// Replans from the vertex the surveyor is at or walking to, with the budget left, to
+    /// the same end, conditioning on the pilot data and every sample collected so far. The
+    /// walked part stays recorded. When the budget left cannot reach the end, the new walk
+    /// is the shortest way there (`over_budget`).
+    pub fn replan(&mut self) -> Result<ReplanOutcome> {
+        let started = Instant::now();
+        let b = self.building.clone();
+        let (origin, left) = self.tracker.replan_origin(&b)?;
+        let budget = left.max(0.0);
+        let end = self.tracker.end();
+        let model = self.tracker.surveyor().model();
+        let prior = self.tracker.observations();
+        let seed = self
+            .tracker
+            .options()
+            .seed
+            .wrapping_add(u64::from(self.tracker.replans()) + 1);
+        let to_end = replan::distances_from(&b, end);
+        let over_budget = to_end[origin] > budget + replan::BUDGET_EPS;
+        let walk = if over_budget {
+            replan::shortest_path(&b, origin, end)?
+        } else {
+            self.replanner.replan(&ReplanRequest {
+                building: &b,
+                kernel: self.kernel,
+                model,
+                prior: &prior,
+                start: origin,
+                end,
+                budget_m: budget,
+                seed,
+            })?
+        };
+        b.check_walk(&walk)?;
+        let length = b.walk_length(&walk);
+        if walk.first() != Some(&origin) || walk.last() != Some(&end) {
+            return Err(Error::Session {
+                session: self.id,
+                message: format!(
+                    "replanner {} returned a walk that does not go from {:?} to {:?}",
+                    self.replanner.name(),
+                    b.vertices[origin].id,
+                    b.vertices[end].id
+                ),
+            });
+        }
+        if !over_budget && length > budget + replan::BUDGET_EPS {
+            return Err(Error::Session {
+                session: self.id,
+                message: format!(
+                    "replanner {} returned a walk of {length:.3} m over the {budget:.3} m left",
+                    self.replanner.name()
+                ),
+            });
+        }
+        let engine = UtilityEngine::with_prior(b.clone(), self.kernel, model, &prior)?;
+        let utility = engine.utility(&walk)?;
+        let samples = sample_walk(&b, &walk, &model, &self.kernel)?.len() as u64;
+        let ids = b.walk_ids(&walk);
+        let plan = PlanData {
+            building_id: self.building_id,
+            start: ids[0].clone(),
+            end: b.vertices[end].id.clone(),
+            budget_m: budget,
+            surveyor: serde_json::to_value(model).unwrap_or(serde_json::Value::Null),
+            kernel: self.kernel,
+            algorithm: self.replanner.name(),
+            seed: Some(seed),
+            walk: ids.clone(),
+            length_m: length,
+            samples,
+            utility_nats: utility,
+            elapsed_ms: started.elapsed().as_millis() as u64,
+            created_ms: now_ms(),
+        };
+        let plan_id = self.log.save_plan(&plan)?;
+        let t = self.tracker.last_t_ms().unwrap_or_else(now_ms);
+        let seq = self.log.append(self.id, t, &LogEvent::Replan { plan_id })?;
+        self.tracker.apply_replan(&b, &walk, seq)?;
+        Ok(ReplanOutcome {
+            seq,
+            plan_id,
+            from_vertex: ids[0].clone(),
+            walk: ids,
+            length_m: length,
+            budget_left_m: left,
+            over_budget,
+            utility_nats: utility,
+        })
+    }
+
+    /// What to do next.
+    pub fn guidance(&self) -> Guidance {
+        self.tracker.guidance(&self.building)
+    }
+
+    /// The vertices still ahead on the walk (empty when off-route or at the end).
+    pub fn route_ahead(&self) -> Vec<Waypoint> {
+        self.tracker.route_ahead(&self.building)
+    }
+
+    /// Posterior standard deviation at every vertex given the pilot data and the samples.
+    fn uncertainty(&self) -> Result<Vec<VertexUncertainty>> {
+        let b = &self.building;
+        let mut train: Vec<Point> = b.pilot_points();
+        let mut noise = vec![self.kernel.sn2; train.len()];
+        for o in self.tracker.observations() {
+            train.push(o.pos);
+            noise.push(self.kernel.sn2 + o.extra_noise);
+        }
+        let values = DMatrix::zeros(train.len(), 1);
+        let gp = GpModel::fit_with_noise(&self.kernel, &train, &noise, &values)?;
+        let var = gp.variance(&b.vertex_points());
+        Ok(b.vertices
+            .iter()
+            .zip(var)
+            .map(|(v, var)| VertexUncertainty {
+                vertex: v.id.clone(),
+                x: v.pos.x,
+                y: v.pos.y,
+                floor: v.pos.floor,
+                std_db: var.max(0.0).sqrt(),
+            })
+            .collect())
+    }
+
+    /// Utility of the samples actually recorded, with their real label noise, nats.
+    pub fn collected_utility(&self) -> Result<f64> {
+        self.engine
+            .utility_of_observations(&self.tracker.observations())
+    }
+
+    /// A snapshot: distance, time, samples, utilities and the coverage map.
+    pub fn progress(&self) -> Result<Progress> {
+        let b = &self.building;
+        let t = &self.tracker;
+        let walked = t.walked_m();
+        let remaining = t.remaining_m(b);
+        let elapsed_s = t.elapsed_ms() as f64 / 1000.0;
+        let observed = if elapsed_s > 10.0 && walked > 5.0 {
+            walked / elapsed_s
+        } else {
+            t.surveyor().speed_mps()
+        };
+        let total = walked + remaining;
+        Ok(Progress {
+            status: t.status(),
+            off_route: t.off_route(),
+            fraction_done: if total > 0.0 {
+                (walked / total).clamp(0.0, 1.0)
+            } else {
+                1.0
+            },
+            walked_m: walked,
+            budget_m: t.budget_m(),
+            budget_left_m: t.budget_m() - walked,
+            remaining_m: remaining,
+            elapsed_s,
+            remaining_s: remaining / observed,
+            samples: t.samples().len() as u64,
+            planned_utility_nats: self.planned_utility,
+            collected_utility_nats: self.collected_utility()?,
+            step_length_m: t.step_length_m(),
+            replans: t.replans(),
+            off_route_events: t.off_route_events(),
+            uncertainty: self.uncertainty()?,
+        })
+    }
+
+    /// Records the end of the walk and returns the summary.
+    pub fn finish(&mut self, t_ms: i64) -> Result<Summary> {
+        self.record(Event::Finish { t_ms })?;
+        self.summary()
+    }
+
+    /// The summary of the session so far (final once finished).
+    pub fn summary(&self) -> Result<Summary> {
+        let p = self.progress()?;
+        let n = p.uncertainty.len().max(1) as f64;
+        Ok(Summary {
+            session_id: self.id,
+            status: p.status,
+            walked_m: p.walked_m,
+            budget_m: p.budget_m,
+            elapsed_s: p.elapsed_s,
+            samples: p.samples,
+            check_ins: self.tracker.check_ins(),
+            steps: self.tracker.steps_total(),
+            planned_utility_nats: p.planned_utility_nats,
+            collected_utility_nats: p.collected_utility_nats,
+            step_length_m: p.step_length_m,
+            replans: p.replans,
+            off_route_events: p.off_route_events,
+            mean_std_db: p.uncertainty.iter().map(|u| u.std_db).sum::<f64>() / n,
+            max_std_db: p.uncertainty.iter().map(|u| u.std_db).fold(0.0, f64::max),
+        })
+    }
+
+    /// The session's store id.
+    pub fn id(&self) -> i64 {
+        self.id
+    }
+
+    /// The plan the session started from.
+    pub fn plan_id(&self) -> i64 {
+        self.plan_id
+    }
+
+    /// Store id of the building.
+    pub fn building_id(&self) -> i64 {
+        self.building_id
+    }
+
+    /// The building.
+    pub fn building(&self) -> &Arc<Building> {
+        &self.building
+    }
+
+    pub fn status(&self) -> SessionStatus {
+        self.tracker.status()
+    }
+
+    /// Utility of the plan as first planned, nats.
+    pub fn planned_utility(&self) -> f64 {
+        self.planned_utility
+    }
+
+    /// The samples collected so far.
+    pub fn samples(&self) -> &[CollectedSample] {
+        self.tracker.samples()
+    }
+
+    /// The state machine (read-only), for inspection and tests.
+    pub fn tracker(&self) -> &Tracker {
+        &self.tracker
+    }
+
+    /// The whole state as JSON: equal digests mean equal states.
+    pub fn digest(&self) -> String {
+        serde_json::to_string(&self.tracker).unwrap_or_default()
+    }
+
+    /// Seq of the last event applied.
+    pub fn last_seq(&self) -> i64 {
+        self.tracker.last_seq()
+    }
+}

@@ -1,0 +1,267 @@
+//! Replanning during a session: a walk from the current vertex to the plan's end within the
+//! budget left, conditioned on the pilot data plus everything collected so far.
+//!
+//! The session asks a [`Replanner`]; [`GreedyReplanner`] is the built-in one (best utility
+//! gain per metre, always keeping the way to the end within budget). The planners of
+//! `trailprint::plan` plug in through the same trait.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::sync::Arc;
+
+use crate::building::Building;
+use crate::gp::Kernel;
+use crate::samples::SurveyorModel;
+use crate::utility::{Observation, UtilityEngine};
+use crate::{Error, Result};
+
+/// Slack on the budget (SPEC section 3).
+pub const BUDGET_EPS: f64 = 1e-9;
+
+/// What a replanner is asked for.
+#[derive(Debug, Clone)]
+pub struct ReplanRequest<'a> {
+    pub building: &'a Arc<Building>,
+    pub kernel: Kernel,
+    pub model: SurveyorModel,
+    /// Samples collected so far with their label noise (pilot data is added by the engine).
+    pub prior: &'a [Observation],
+    pub start: usize,
+    pub end: usize,
+    pub budget_m: f64,
+    pub seed: u64,
+}
+
+/// A walk planner usable for replanning.
+pub trait Replanner: Send + Sync {
+    /// A walk (vertex indices) from `start` to `end` of length at most `budget_m`, or
+    /// [`Error::Unreachable`] when none exists.
+    fn replan(&self, request: &ReplanRequest<'_>) -> Result<Vec<usize>>;
+    /// Name stored with the plan (`algorithm`).
+    fn name(&self) -> String;
+}
+
+/// Greedy on utility gain per metre with a short look-ahead: at each step it tries every
+/// path of up to `depth` edges from the current vertex (the depth grows with the sample
+/// spacing, so that a path can reach the next sample), keeps the end reachable within
+/// budget, and appends the path of best gain per metre; it stops when nothing gains and
+/// closes the walk with a shortest path to the end.
+///
+/// Complexity: per step `O(degree^depth)` utility evaluations, each `O(|V|^3)` on the
+/// engine's `Sigma` plus the samples of the path.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct GreedyReplanner;
+
+struct Search<'a> {
+    b: &'a Building,
+    to_end: &'a [f64],
+    budget: f64,
+    current: f64,
+    path: Vec<usize>,
+    best: Option<(f64, Vec<usize>, f64)>,
+}
+
+impl Search<'_> {
+    fn explore(
+        &mut self,
+        walk: &mut crate::utility::WalkState<'_>,
+        depth: usize,
+        path_len: f64,
+    ) -> Result<()> {
+        let at = walk.last();
+        let used = walk.length();
+        for &(nb, e) in self.b.neighbours(at) {
+            let len = self.b.edges[e].length;
+            if used + len + self.to_end[nb] > self.budget + BUDGET_EPS {
+                continue;
+            }
+            let mark = walk.mark();
+            walk.push(nb)?;
+            self.path.push(nb);
+            let u = walk.utility()?;
+            let gain = (u - self.current) / (path_len + len);
+            if self.best.as_ref().is_none_or(|(g, _, _)| gain > *g) {
+                self.best = Some((gain, self.path.clone(), u));
+            }
+            if depth > 1 {
+                self.explore(walk, depth - 1, path_len + len)?;
+            }
+            self.path.pop();
+            walk.rewind(&mark);
+        }
+        Ok(())
+    }
+}
+
+impl Replanner for GreedyReplanner {
+    fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
+        let b = r.building;
+        let to_end = distances_from(b, r.end);
+        check_reachable(b, r.start, r.end, r.budget_m, &to_end)?;
+        let engine = UtilityEngine::with_prior(b.clone(), r.kernel, r.model, r.prior)?;
+        let mean_edge = if b.edges.is_empty() {
+            1.0
+        } else {
+            b.total_edge_length() / b.edges.len() as f64
+        };
+        let depth = ((r.model.spacing() / mean_edge).ceil() as usize + 1).clamp(2, 5);
+        let mut walk = engine.start(r.start)?;
+        let mut search = Search {
+            b,
+            to_end: &to_end,
+            budget: r.budget_m,
+            current: walk.utility()?,
+            path: Vec::new(),
+            best: None,
+        };
+        loop {
+            search.best = None;
+            search.explore(&mut walk, depth, 0.0)?;
+            match search.best.take() {
+                Some((gain, path, u)) if gain > 1e-12 => {
+                    for v in path {
+                        walk.push(v)?;
+                    }
+                    search.current = u;
+                }
+                _ => break,
+            }
+        }
+        let mut out = walk.walk().to_vec();
+        let tail = shortest_path(b, walk.last(), r.end)?;
+        out.extend_from_slice(&tail[1..]);
+        Ok(out)
+    }
+
+    fn name(&self) -> String {
+        "session-greedy".into()
+    }
+}
+
+/// Errors with [`Error::Unreachable`] when the shortest way from `start` to `end` does not
+/// fit the budget.
+pub fn check_reachable(
+    b: &Building,
+    start: usize,
+    end: usize,
+    budget_m: f64,
+    to_end: &[f64],
+) -> Result<()> {
+    if to_end[start] > budget_m + BUDGET_EPS {
+        return Err(Error::Unreachable {
+            start: b.vertices[start].id.clone(),
+            end: b.vertices[end].id.clone(),
+            budget: budget_m,
+            shortest: to_end[start],
+        });
+    }
+    Ok(())
+}
+
+#[derive(PartialEq)]
+struct Item(f64, usize);
+impl Eq for Item {}
+impl PartialOrd for Item {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Item {
+    fn cmp(&self, other: &Self) -> Ordering {
+        // Reversed: BinaryHeap is a max-heap.
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
+
+fn dijkstra(b: &Building, from: usize) -> (Vec<f64>, Vec<usize>) {
+    let n = b.len();
+    let mut dist = vec![f64::INFINITY; n];
+    let mut prev = vec![usize::MAX; n];
+    let mut heap = BinaryHeap::new();
+    dist[from] = 0.0;
+    heap.push(Item(0.0, from));
+    while let Some(Item(d, v)) = heap.pop() {
+        if d > dist[v] {
+            continue;
+        }
+        for &(w, e) in b.neighbours(v) {
+            let nd = d + b.edges[e].length;
+            if nd < dist[w] {
+                dist[w] = nd;
+                prev[w] = v;
+                heap.push(Item(nd, w));
+            }
+        }
+    }
+    (dist, prev)
+}
+
+/// Shortest walking distance from every vertex to `to` (the graph is undirected).
+pub fn distances_from(b: &Building, to: usize) -> Vec<f64> {
+    dijkstra(b, to).0
+}
+
+/// A shortest walk from `from` to `to` (vertex indices, both included).
+pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>> {
+    // Search from `to` so that following `prev` from `from` yields the walk in order.
+    let (dist, prev) = dijkstra(b, to);
+    if !dist[from].is_finite() {
+        return Err(Error::InvalidRequest(format!(
+            "no path from {:?} to {:?}",
+            b.vertices[from].id, b.vertices[to].id
+        )));
+    }
+    let mut out = vec![from];
+    let mut v = from;
+    while v != to {
+        v = prev[v];
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Any planner of [`crate::plan`], conditioned on the collected samples through
+/// [`plan_with_prior`](crate::plan::plan_with_prior). Deterministic for a seed unless the
+/// algorithm stops on a time limit (`auto` does by default); a resumed session redoes an
+/// interrupted replan, so prefer a deterministic algorithm when replays must match bit for
+/// bit.
+#[derive(Debug, Clone)]
+pub struct PlannerReplanner {
+    pub algorithm: crate::plan::Algorithm,
+    pub time_limit: Option<std::time::Duration>,
+    pub params: crate::plan::Params,
+}
+
+impl PlannerReplanner {
+    pub fn new(algorithm: crate::plan::Algorithm) -> Self {
+        PlannerReplanner {
+            algorithm,
+            time_limit: None,
+            params: crate::plan::Params::default(),
+        }
+    }
+}
+
+impl Replanner for PlannerReplanner {
+    fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
+        let b = r.building;
+        let req = crate::plan::PlanRequest {
+            start: b.vertices[r.start].id.clone(),
+            end: b.vertices[r.end].id.clone(),
+            budget: r.budget_m,
+            model: r.model,
+            kernel: r.kernel,
+            algorithm: self.algorithm,
+            seed: r.seed,
+            time_limit: self.time_limit,
+            params: self.params,
+        };
+        let res =
+            crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;
+        Ok(res.walk_indices)
+    }
+
+    fn name(&self) -> String {
+        self.algorithm.name().to_string()
+    }
+}

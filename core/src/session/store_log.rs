@@ -1,0 +1,178 @@
+//! The SQLite store as a [`SessionLog`]: plans in `plans`/`plan_steps`, the session row in
+//! `survey_sessions` (its `surveyor` column holds the [`SessionSettings`](super::SessionSettings)
+//! JSON), events in `session_events` with the store's per-session `seq`, and every scan's
+//! fingerprint in `collected_fingerprints`, so that `trailprint export --collected` needs no
+//! replay. Each append is one committed transaction (WAL, `synchronous = FULL`): once
+//! [`SessionLog::append`] returns, the event survives a kill.
+
+use std::sync::Arc;
+
+use rusqlite::OptionalExtension;
+
+use super::log::{LogEntry, LogEvent, PlanData, SessionLog, SessionRow};
+use crate::building::Building;
+use crate::store::{BuildingRef, CollectedFingerprint, PlanRecord, SessionEvent, Store};
+use crate::{Error, Result};
+
+fn to_store(event: &LogEvent) -> SessionEvent {
+    match event.clone() {
+        LogEvent::Step { steps, distance_m } => SessionEvent::Step { steps, distance_m },
+        LogEvent::Scan {
+            x,
+            y,
+            floor,
+            sigma_m,
+            since_checkin_m,
+            rss,
+        } => SessionEvent::Scan(CollectedFingerprint {
+            x,
+            y,
+            floor,
+            sigma_m,
+            since_checkin_m,
+            rss,
+        }),
+        LogEvent::CheckIn { vertex } => SessionEvent::CheckIn { vertex },
+        LogEvent::Pose { x, y, floor } => SessionEvent::Pose {
+            x,
+            y,
+            floor,
+            sigma_m: 0.0,
+        },
+        LogEvent::Replan { plan_id } => SessionEvent::Replan { plan_id },
+        LogEvent::Pause => SessionEvent::Pause,
+        LogEvent::Resume => SessionEvent::Resume,
+        LogEvent::Finish => SessionEvent::Finish,
+        LogEvent::Abort { reason } => SessionEvent::Abort { reason },
+    }
+}
+
+fn from_store(event: SessionEvent) -> LogEvent {
+    match event {
+        SessionEvent::Step { steps, distance_m } => LogEvent::Step { steps, distance_m },
+        SessionEvent::Scan(fp) => LogEvent::Scan {
+            x: fp.x,
+            y: fp.y,
+            floor: fp.floor,
+            sigma_m: fp.sigma_m,
+            since_checkin_m: fp.since_checkin_m,
+            rss: fp.rss,
+        },
+        SessionEvent::CheckIn { vertex } => LogEvent::CheckIn { vertex },
+        SessionEvent::Pose { x, y, floor, .. } => LogEvent::Pose { x, y, floor },
+        SessionEvent::Replan { plan_id } => LogEvent::Replan { plan_id },
+        SessionEvent::Pause => LogEvent::Pause,
+        SessionEvent::Resume => LogEvent::Resume,
+        SessionEvent::Finish => LogEvent::Finish,
+        SessionEvent::Abort { reason } => LogEvent::Abort { reason },
+    }
+}
+
+impl SessionLog for Store {
+    fn building(&self, building_id: i64) -> Result<Arc<Building>> {
+        Ok(Arc::new(self.get_building(BuildingRef::Id(building_id))?))
+    }
+
+    fn load_plan(&self, plan_id: i64) -> Result<PlanData> {
+        let p = Store::load_plan(self, plan_id)?;
+        let r = p.record;
+        Ok(PlanData {
+            building_id: p.building_id,
+            start: r.start,
+            end: r.end,
+            budget_m: r.budget_m,
+            surveyor: r.surveyor,
+            kernel: r.kernel,
+            algorithm: r.algorithm,
+            seed: r.seed,
+            walk: r.walk,
+            length_m: r.length_m,
+            samples: r.samples,
+            utility_nats: r.utility_nats,
+            elapsed_ms: r.elapsed_ms,
+            created_ms: r.created_ms,
+        })
+    }
+
+    fn save_plan(&self, plan: &PlanData) -> Result<i64> {
+        let record = PlanRecord {
+            start: plan.start.clone(),
+            end: plan.end.clone(),
+            budget_m: plan.budget_m,
+            surveyor: plan.surveyor.clone(),
+            kernel: plan.kernel,
+            algorithm: plan.algorithm.clone(),
+            seed: plan.seed,
+            walk: plan.walk.clone(),
+            length_m: plan.length_m,
+            samples: plan.samples,
+            utility_nats: plan.utility_nats,
+            elapsed_ms: plan.elapsed_ms,
+            created_ms: plan.created_ms,
+        };
+        Store::save_plan(self, BuildingRef::Id(plan.building_id), &record)
+    }
+
+    fn create_session(
+        &self,
+        building_id: i64,
+        plan_id: i64,
+        settings: &serde_json::Value,
+        created_ms: i64,
+    ) -> Result<i64> {
+        Store::create_session(
+            self,
+            BuildingRef::Id(building_id),
+            Some(plan_id),
+            Some(settings),
+            created_ms,
+        )
+    }
+
+    fn session(&self, session_id: i64) -> Result<SessionRow> {
+        let row: Option<(i64, Option<i64>, Option<String>)> = self.with_connection(|c| {
+            Ok(c.query_row(
+                "SELECT building_id, plan_id, surveyor FROM survey_sessions WHERE id = ?1",
+                [session_id],
+                |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
+            )
+            .optional()?)
+        })?;
+        let (building_id, plan_id, settings) = row.ok_or_else(|| {
+            Error::NotFound(format!("session {session_id} is not in the database"))
+        })?;
+        let bad = |m: String| Error::Session {
+            session: session_id,
+            message: m,
+        };
+        let plan_id = plan_id
+            .ok_or_else(|| bad("the session has no plan to walk (plan_id is NULL)".into()))?;
+        let settings = settings
+            .ok_or_else(|| bad("the session has no surveyor settings".into()))
+            .and_then(|s| {
+                serde_json::from_str(&s)
+                    .map_err(|e| bad(format!("stored surveyor settings are not JSON: {e}")))
+            })?;
+        Ok(SessionRow {
+            building_id,
+            plan_id,
+            settings,
+        })
+    }
+
+    fn append(&self, session_id: i64, t_ms: i64, event: &LogEvent) -> Result<i64> {
+        self.append_event(session_id, t_ms, &to_store(event))
+    }
+
+    fn events(&self, session_id: i64) -> Result<Vec<LogEntry>> {
+        Ok(self
+            .list_events(session_id, 0)?
+            .into_iter()
+            .map(|e| LogEntry {
+                seq: e.seq,
+                t_ms: e.at_ms,
+                event: from_store(e.event),
+            })
+            .collect())
+    }
+}

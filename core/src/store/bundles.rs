@@ -1,0 +1,431 @@
+//! Survey bundles: what one phone collected, as one file another phone or a desktop can
+//! merge (issue 9).
+//!
+//! A bundle is JSON: `{"format": "trailprint-bundle/1", "sha256": "...", "body": {...}}`.
+//! The body carries the building (so a database that has never seen it can take the
+//! sessions), provenance (device, surveyor, time) and, per session, its global `uid`, the
+//! plans it used and its whole event log. `sha256` is the SHA-256 of the body as compact
+//! JSON with sorted keys; a bundle whose checksum does not match, or that does not parse
+//! (a truncated file), is rejected before anything is written.
+//!
+//! Import is one transaction and matches sessions by `uid`: a session already present gets
+//! only the events it lacks (a phone may export the same session again after walking on),
+//! so importing the same bundle twice changes nothing and bundles can be imported in any
+//! order. Two logs that disagree on an event they share are refused as conflicting.
+
+use std::collections::BTreeMap;
+
+use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::plans::PlanRecord;
+use super::sessions::SessionEvent;
+use super::{BuildingRef, ImportOptions, Store, now_ms};
+use crate::building::{Building, BuildingFile};
+use crate::{Error, Result};
+
+/// The only bundle format version this code reads and writes.
+pub const BUNDLE_FORMAT: &str = "trailprint-bundle/1";
+
+/// One event of a session log in a bundle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BundleEvent {
+    pub seq: i64,
+    pub at_ms: i64,
+    pub event: SessionEvent,
+}
+
+/// A plan a session used, under the id it had on the exporting device.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BundlePlan {
+    pub source_id: i64,
+    pub plan: PlanRecord,
+}
+
+/// A session in a bundle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BundleSession {
+    pub uid: String,
+    pub created_ms: i64,
+    pub device: Option<String>,
+    pub surveyor_name: Option<String>,
+    pub surveyor: Option<serde_json::Value>,
+    /// Source id (in `plans`) of the plan the session started with.
+    pub plan: Option<i64>,
+    pub plans: Vec<BundlePlan>,
+    pub events: Vec<BundleEvent>,
+}
+
+/// The checksummed part of a bundle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BundleBody {
+    pub created_ms: i64,
+    pub device: Option<String>,
+    pub surveyor_name: Option<String>,
+    pub building: BuildingFile,
+    pub sessions: Vec<BundleSession>,
+}
+
+/// What an import did.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct BundleImportReport {
+    pub bundle_id: String,
+    pub building: String,
+    pub building_created: bool,
+    pub sessions_added: u64,
+    pub sessions_extended: u64,
+    pub sessions_unchanged: u64,
+    pub events_added: u64,
+}
+
+/// Who and what exports a bundle.
+#[derive(Debug, Clone, Default)]
+pub struct ExportOptions {
+    pub device: Option<String>,
+    pub surveyor_name: Option<String>,
+    /// Only these session ids (local); all of the building's sessions when empty.
+    pub sessions: Vec<i64>,
+}
+
+fn sha256_hex(text: &str) -> String {
+    let digest = Sha256::digest(text.as_bytes());
+    digest.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Compact JSON of a value with sorted keys (serde_json's map is ordered): the text the
+/// checksum is computed on.
+fn canonical(v: &serde_json::Value) -> String {
+    v.to_string()
+}
+
+fn random_uid() -> String {
+    use rand::RngExt;
+    // An identifier, not a modelling choice: it must differ between devices, so it comes
+    // from the operating system's entropy rather than a seed.
+    let mut rng = rand::rng();
+    let hi: u64 = rng.random();
+    let lo: u64 = rng.random();
+    format!("{hi:016x}{lo:016x}")
+}
+
+impl Store {
+    /// Writes a bundle of a building's sessions (all, or those in `options.sessions`) and
+    /// returns its JSON text. Sessions without a global id get one (stored), so exporting
+    /// again names them the same.
+    pub fn export_bundle<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        options: &ExportOptions,
+    ) -> Result<String> {
+        let building = building.into();
+        let file = self.export_building(building)?;
+        let info = self.building_info(building)?;
+        let mut sessions = Vec::new();
+        for s in self.list_sessions(BuildingRef::Id(info.id))? {
+            if !options.sessions.is_empty() && !options.sessions.contains(&s.id) {
+                continue;
+            }
+            let uid = self.with_connection(|c| {
+                let uid: Option<String> = c.query_row(
+                    "SELECT uid FROM survey_sessions WHERE id = ?1",
+                    [s.id],
+                    |r| r.get(0),
+                )?;
+                match uid {
+                    Some(u) => Ok(u),
+                    None => {
+                        let u = random_uid();
+                        c.execute(
+                            "UPDATE survey_sessions SET uid = ?1 WHERE id = ?2 AND uid IS NULL",
+                            params![u, s.id],
+                        )?;
+                        Ok(u)
+                    }
+                }
+            })?;
+            let (device, surveyor_name): (Option<String>, Option<String>) =
+                self.with_connection(|c| {
+                    Ok(c.query_row(
+                        "SELECT device, surveyor_name FROM survey_sessions WHERE id = ?1",
+                        [s.id],
+                        |r| Ok((r.get(0)?, r.get(1)?)),
+                    )?)
+                })?;
+            let events: Vec<BundleEvent> = self
+                .list_events(s.id, 0)?
+                .into_iter()
+                .map(|e| BundleEvent {
+                    seq: e.seq,
+                    at_ms: e.at_ms,
+                    event: e.event,
+                })
+                .collect();
+            let mut plan_ids: Vec<i64> = s.plan_id.into_iter().collect();
+            for e in &events {
+                if let SessionEvent::Replan { plan_id } = e.event
+                    && !plan_ids.contains(&plan_id)
+                {
+                    plan_ids.push(plan_id);
+                }
+            }
+            let mut plans = Vec::new();
+            for id in plan_ids {
+                plans.push(BundlePlan {
+                    source_id: id,
+                    plan: self.load_plan(id)?.record,
+                });
+            }
+            sessions.push(BundleSession {
+                uid,
+                created_ms: s.created_ms,
+                // A session recorded here carries this device's provenance.
+                device: device.or_else(|| options.device.clone()),
+                surveyor_name: surveyor_name.or_else(|| options.surveyor_name.clone()),
+                surveyor: s.surveyor,
+                plan: s.plan_id,
+                plans,
+                events,
+            });
+        }
+        let body = BundleBody {
+            created_ms: now_ms(),
+            device: options.device.clone(),
+            surveyor_name: options.surveyor_name.clone(),
+            building: file,
+            sessions,
+        };
+        let body_value = serde_json::to_value(&body)
+            .map_err(|e| Error::InvalidRequest(format!("bundle: {e}")))?;
+        let sha = sha256_hex(&canonical(&body_value));
+        let doc = serde_json::json!({"format": BUNDLE_FORMAT, "sha256": sha, "body": body_value});
+        Ok(doc.to_string())
+    }
+
+    /// Imports a bundle (JSON text; `origin` names it in errors) in one transaction.
+    pub fn import_bundle(&self, text: &str, origin: &str) -> Result<BundleImportReport> {
+        let (bundle_id, body) = parse_bundle(text, origin)?;
+        let building =
+            Building::from_file(body.building.clone(), &format!("{origin}: body.building"))?;
+        self.with_connection(|conn| import_in_tx(conn, &bundle_id, &body, &building, origin))
+    }
+}
+
+/// Parses and verifies a bundle; nothing is written.
+pub fn parse_bundle(text: &str, origin: &str) -> Result<(String, BundleBody)> {
+    let bad = |path: &str, message: String| Error::Parse {
+        origin: origin.to_string(),
+        path: path.to_string(),
+        message,
+    };
+    let doc: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+        bad(
+            "$",
+            format!("not a complete bundle (truncated or not JSON): {e}"),
+        )
+    })?;
+    let format = doc.get("format").and_then(|f| f.as_str()).unwrap_or("");
+    if format != BUNDLE_FORMAT {
+        return Err(bad(
+            "format",
+            format!("unknown bundle format {format:?}, expected {BUNDLE_FORMAT:?}"),
+        ));
+    }
+    let sha = doc
+        .get("sha256")
+        .and_then(|s| s.as_str())
+        .ok_or_else(|| bad("sha256", "missing checksum".into()))?;
+    let body_value = doc
+        .get("body")
+        .ok_or_else(|| bad("body", "missing".into()))?;
+    let actual = sha256_hex(&canonical(body_value));
+    if actual != sha {
+        return Err(bad(
+            "sha256",
+            format!(
+                "checksum mismatch: the bundle is corrupt (expected {sha}, content hashes to {actual})"
+            ),
+        ));
+    }
+    let body: BundleBody = serde_path_to_error::deserialize(body_value.clone()).map_err(|e| {
+        let path = format!("body.{}", e.path());
+        bad(&path, e.into_inner().to_string())
+    })?;
+    for (i, s) in body.sessions.iter().enumerate() {
+        if s.uid.trim().is_empty() {
+            return Err(bad(
+                &format!("body.sessions[{i}].uid"),
+                "must not be empty".into(),
+            ));
+        }
+        for (j, e) in s.events.iter().enumerate() {
+            if e.seq != j as i64 + 1 {
+                return Err(bad(
+                    &format!("body.sessions[{i}].events[{j}].seq"),
+                    format!("expected seq {}, got {}", j + 1, e.seq),
+                ));
+            }
+        }
+    }
+    Ok((sha.to_string(), body))
+}
+
+fn import_in_tx(
+    conn: &mut Connection,
+    bundle_id: &str,
+    body: &BundleBody,
+    building: &Building,
+    origin: &str,
+) -> Result<BundleImportReport> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let existing: Option<i64> = tx
+        .query_row(
+            "SELECT id FROM buildings WHERE name = ?1",
+            [&building.name],
+            |r| r.get(0),
+        )
+        .optional()?;
+    let (bid, building_created) = match existing {
+        Some(id) => (id, false),
+        None => {
+            let report = super::buildings::import_in(
+                &tx,
+                building,
+                Some(origin),
+                &ImportOptions::default(),
+            )?;
+            (report.id, true)
+        }
+    };
+    let mut report = BundleImportReport {
+        bundle_id: bundle_id.to_string(),
+        building: building.name.clone(),
+        building_created,
+        sessions_added: 0,
+        sessions_extended: 0,
+        sessions_unchanged: 0,
+        events_added: 0,
+    };
+    for (si, s) in body.sessions.iter().enumerate() {
+        let ctx = |m: String| {
+            Error::InvalidRequest(format!(
+                "{origin}: body.sessions[{si}] (session {}): {m}",
+                s.uid
+            ))
+        };
+        // Plans: saved once per session import, under new local ids.
+        let local: Option<(i64, i64)> = tx
+            .query_row(
+                "SELECT id, building_id FROM survey_sessions WHERE uid = ?1",
+                [&s.uid],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .optional()?;
+        let mut plan_map: BTreeMap<i64, i64> = BTreeMap::new();
+        let session_id = match local {
+            Some((id, b)) => {
+                if b != bid {
+                    return Err(ctx(format!(
+                        "already in the database for another building (id {b})"
+                    )));
+                }
+                id
+            }
+            None => {
+                for p in &s.plans {
+                    let new_id = super::plans::save_in(&tx, BuildingRef::Id(bid), &p.plan)?;
+                    plan_map.insert(p.source_id, new_id);
+                }
+                let plan_id = match s.plan {
+                    Some(src) => Some(*plan_map.get(&src).ok_or_else(|| {
+                        ctx(format!("its plan {src} is not among the bundle's plans"))
+                    })?),
+                    None => None,
+                };
+                let id = super::sessions::create_in(
+                    &tx,
+                    BuildingRef::Id(bid),
+                    plan_id,
+                    s.surveyor.as_ref(),
+                    s.created_ms,
+                )?;
+                tx.execute(
+                    "UPDATE survey_sessions SET uid = ?1, device = ?2, surveyor_name = ?3, imported_ms = ?4 WHERE id = ?5",
+                    params![s.uid, s.device, s.surveyor_name, now_ms(), id],
+                )?;
+                report.sessions_added += 1;
+                id
+            }
+        };
+        let have: Vec<super::sessions::StoredEvent> = super::sessions::events(&tx, session_id, 0)?;
+        // The shared prefix must agree (kind and time; replans may differ in local plan id).
+        for (e, h) in s.events.iter().zip(&have) {
+            if e.event.kind() != h.event.kind() || e.at_ms != h.at_ms {
+                return Err(ctx(format!(
+                    "conflicting histories at event {}: the bundle has {} at {} ms, the database {} at {} ms",
+                    e.seq,
+                    e.event.kind(),
+                    e.at_ms,
+                    h.event.kind(),
+                    h.at_ms
+                )));
+            }
+        }
+        let new_events = &s.events[have.len().min(s.events.len())..];
+        if local.is_some() {
+            if new_events.is_empty() {
+                report.sessions_unchanged += 1;
+            } else {
+                report.sessions_extended += 1;
+                // Plans referenced by the new replans must be brought in too.
+                for p in &s.plans {
+                    let referenced = new_events
+                        .iter()
+                        .any(|e| matches!(e.event, SessionEvent::Replan { plan_id } if plan_id == p.source_id));
+                    if referenced {
+                        let new_id = super::plans::save_in(&tx, BuildingRef::Id(bid), &p.plan)?;
+                        plan_map.insert(p.source_id, new_id);
+                    }
+                }
+            }
+        }
+        for e in new_events {
+            let event = match &e.event {
+                SessionEvent::Replan { plan_id } => SessionEvent::Replan {
+                    plan_id: *plan_map.get(plan_id).ok_or_else(|| {
+                        ctx(format!(
+                            "event {} replans to plan {plan_id}, which the bundle does not carry",
+                            e.seq
+                        ))
+                    })?,
+                },
+                other => other.clone(),
+            };
+            let seq = super::sessions::append_in(&tx, session_id, e.at_ms, &event)
+                .map_err(|err| ctx(format!("event {}: {err}", e.seq)))?;
+            if seq != e.seq {
+                return Err(ctx(format!("event {} would be stored as {seq}", e.seq)));
+            }
+            report.events_added += 1;
+        }
+    }
+    tx.execute(
+        "INSERT INTO bundle_imports (bundle_id, device, surveyor_name, created_ms, imported_ms, sessions_added, events_added)
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (bundle_id) DO NOTHING",
+        params![
+            bundle_id,
+            body.device,
+            body.surveyor_name,
+            body.created_ms,
+            now_ms(),
+            report.sessions_added as i64,
+            report.events_added as i64
+        ],
+    )?;
+    tx.commit()?;
+    Ok(report)
+}

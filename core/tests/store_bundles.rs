@@ -1,0 +1,296 @@
+//! Survey bundles (issue 9): merging is idempotent and order-independent, provenance is
+//! kept, and a corrupt or truncated bundle is rejected with nothing imported.
+
+use std::collections::BTreeMap;
+
+use trailprint::building::Building;
+use trailprint::gp::Kernel;
+use trailprint::store::{
+    BuildingRef, CollectedFingerprint, ExportOptions, ImportOptions, PlanRecord, SessionEvent,
+    Store,
+};
+use trailprint::synth::DEMO_BUILDING_JSON;
+
+fn demo() -> Building {
+    Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo")
+}
+
+fn plan_record(walk: &[&str]) -> PlanRecord {
+    PlanRecord {
+        start: walk[0].into(),
+        end: walk[walk.len() - 1].into(),
+        budget_m: 50.0,
+        surveyor: serde_json::json!({"model": "robot", "interval": 0.5}),
+        kernel: Kernel::new(40.0, 6.0, 4.0),
+        algorithm: "greedy".into(),
+        seed: Some(1),
+        walk: walk.iter().map(|s| s.to_string()).collect(),
+        length_m: 10.0,
+        samples: 21,
+        utility_nats: 3.5,
+        elapsed_ms: 12,
+        created_ms: 1_700_000_000_000,
+    }
+}
+
+fn scan(x: f64, rss: f64) -> SessionEvent {
+    SessionEvent::Scan(CollectedFingerprint {
+        x,
+        y: 0.0,
+        floor: 0,
+        sigma_m: 0.1 * x,
+        since_checkin_m: Some(x),
+        rss: BTreeMap::from([
+            ("ap-01".to_string(), rss),
+            ("ap-02".to_string(), rss - 10.0),
+        ]),
+    })
+}
+
+/// A store with the demo building and one session of `n` scans (plus a check-in and a
+/// replan) recorded at times starting from `t0`.
+fn device(t0: i64, n: usize) -> (Store, i64) {
+    let s = Store::open_in_memory().expect("store");
+    let b = demo();
+    let id = s
+        .import_building(&b, Some("demo"), &ImportOptions::default())
+        .expect("import")
+        .id;
+    let first = b.vertices[0].id.clone();
+    let second = b.vertices[1].id.clone();
+    let p1 = s
+        .save_plan(BuildingRef::Id(id), &plan_record(&[&first, &second]))
+        .expect("plan");
+    let p2 = s
+        .save_plan(BuildingRef::Id(id), &plan_record(&[&first]))
+        .expect("plan");
+    let sid = s
+        .create_session(BuildingRef::Id(id), Some(p1), None, t0)
+        .expect("session");
+    s.append_event(
+        sid,
+        t0 + 1,
+        &SessionEvent::CheckIn {
+            vertex: first.clone(),
+        },
+    )
+    .expect("check-in");
+    for i in 0..n {
+        s.append_event(sid, t0 + 10 + i as i64, &scan(i as f64, -50.0 - i as f64))
+            .expect("scan");
+    }
+    s.append_event(sid, t0 + 100, &SessionEvent::Replan { plan_id: p2 })
+        .expect("replan");
+    (s, sid)
+}
+
+/// Everything a merge must agree on, independent of local ids: per session uid, its
+/// provenance and its event log (kinds, times, scans).
+fn content(s: &Store) -> Vec<String> {
+    let mut out = Vec::new();
+    for b in s.list_buildings().expect("list") {
+        for sess in s.list_sessions(BuildingRef::Id(b.id)).expect("sessions") {
+            let (uid, device, who): (Option<String>, Option<String>, Option<String>) = s
+                .with_connection(|c| {
+                    Ok(c.query_row(
+                        "SELECT uid, device, surveyor_name FROM survey_sessions WHERE id = ?1",
+                        [sess.id],
+                        |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
+                    )?)
+                })
+                .expect("row");
+            let events: Vec<String> = s
+                .list_events(sess.id, 0)
+                .expect("events")
+                .iter()
+                .map(|e| match &e.event {
+                    SessionEvent::Replan { .. } => format!("{} {} replan", e.seq, e.at_ms),
+                    other => format!(
+                        "{} {} {}",
+                        e.seq,
+                        e.at_ms,
+                        serde_json::to_string(other).expect("json")
+                    ),
+                })
+                .collect();
+            out.push(format!(
+                "{uid:?} {device:?} {who:?} {} {}",
+                sess.created_ms,
+                events.join("|")
+            ));
+        }
+    }
+    out.sort();
+    out
+}
+
+fn counts(s: &Store) -> (i64, i64, i64, i64) {
+    s.with_connection(|c| {
+        let q = |sql: &str| c.query_row(sql, [], |r| r.get::<_, i64>(0));
+        Ok((
+            q("SELECT count(*) FROM survey_sessions")?,
+            q("SELECT count(*) FROM session_events")?,
+            q("SELECT count(*) FROM collected_fingerprints")?,
+            q("SELECT count(*) FROM plans")?,
+        ))
+    })
+    .expect("counts")
+}
+
+fn export(s: &Store, device: &str, who: &str) -> String {
+    s.export_bundle(
+        BuildingRef::Name(&demo().name),
+        &ExportOptions {
+            device: Some(device.into()),
+            surveyor_name: Some(who.into()),
+            sessions: vec![],
+        },
+    )
+    .expect("export")
+}
+
+#[test]
+fn importing_twice_changes_nothing_and_order_does_not_matter() {
+    let (a, _) = device(1_000, 5);
+    let (c, _) = device(5_000, 3);
+    let ba = export(&a, "phone-a", "Ann");
+    let bc = export(&c, "phone-c", "Cid");
+    // Into an empty database (the building comes with the bundle) in both orders.
+    let x = Store::open_in_memory().expect("x");
+    let r = x.import_bundle(&ba, "a.json").expect("a");
+    assert!(r.building_created);
+    assert_eq!((r.sessions_added, r.events_added), (1, 7));
+    x.import_bundle(&bc, "c.json").expect("c");
+    let before = (content(&x), counts(&x));
+    let again = x.import_bundle(&ba, "a.json").expect("a again");
+    assert_eq!(
+        (
+            again.sessions_added,
+            again.sessions_extended,
+            again.events_added
+        ),
+        (0, 0, 0)
+    );
+    x.import_bundle(&bc, "c.json").expect("c again");
+    assert_eq!(
+        (content(&x), counts(&x)),
+        before,
+        "a second import must change nothing"
+    );
+    let y = Store::open_in_memory().expect("y");
+    y.import_bundle(&bc, "c.json").expect("c");
+    y.import_bundle(&ba, "a.json").expect("a");
+    assert_eq!(content(&y), content(&x), "order must not matter");
+    // Provenance is kept.
+    assert!(
+        content(&x)
+            .iter()
+            .any(|c| c.contains("\"phone-a\"") && c.contains("\"Ann\""))
+    );
+    assert_eq!(counts(&x), (2, 7 + 5, 5 + 3, 4));
+}
+
+#[test]
+fn a_session_exported_again_after_walking_on_gets_only_its_new_events() {
+    let (a, sid) = device(1_000, 2);
+    let early = export(&a, "phone-a", "Ann");
+    a.append_event(sid, 2_000, &scan(9.0, -70.0)).expect("scan");
+    a.append_event(sid, 2_001, &SessionEvent::Finish)
+        .expect("finish");
+    let late = export(&a, "phone-a", "Ann");
+    let x = Store::open_in_memory().expect("x");
+    x.import_bundle(&early, "early").expect("early");
+    let r = x.import_bundle(&late, "late").expect("late");
+    assert_eq!(
+        (r.sessions_added, r.sessions_extended, r.events_added),
+        (0, 1, 2)
+    );
+    let y = Store::open_in_memory().expect("y");
+    y.import_bundle(&late, "late").expect("late");
+    let r = y.import_bundle(&early, "early").expect("early");
+    assert_eq!((r.sessions_extended, r.events_added), (0, 0));
+    assert_eq!(content(&x), content(&y));
+    // The exporting device keeps the uid: exporting again names the session the same.
+    assert_eq!(
+        trailprint::store::parse_bundle(&early, "e")
+            .expect("e")
+            .1
+            .sessions[0]
+            .uid,
+        trailprint::store::parse_bundle(&late, "l")
+            .expect("l")
+            .1
+            .sessions[0]
+            .uid
+    );
+}
+
+#[test]
+fn corrupt_or_truncated_bundles_are_rejected_and_nothing_is_imported() {
+    let (a, _) = device(1_000, 4);
+    let good = export(&a, "phone-a", "Ann");
+    let x = Store::open_in_memory().expect("x");
+    let before = counts(&x);
+    let truncated = &good[..good.len() / 2];
+    let e = x
+        .import_bundle(truncated, "half.json")
+        .expect_err("truncated")
+        .to_string();
+    assert!(
+        e.starts_with("half.json: $: not a complete bundle (truncated or not JSON)"),
+        "{e}"
+    );
+    // Flip one RSS value inside the body: still valid JSON, but the checksum fails.
+    let corrupt = good.replacen("-51.0", "-15.0", 1);
+    assert_ne!(corrupt, good);
+    let e = x
+        .import_bundle(&corrupt, "flip.json")
+        .expect_err("corrupt")
+        .to_string();
+    assert!(
+        e.contains("flip.json: sha256: checksum mismatch: the bundle is corrupt"),
+        "{e}"
+    );
+    let e = x
+        .import_bundle("{\"format\":\"trailprint-bundle/9\"}", "v9.json")
+        .expect_err("format")
+        .to_string();
+    assert!(
+        e.contains("unknown bundle format \"trailprint-bundle/9\""),
+        "{e}"
+    );
+    assert_eq!(counts(&x), before);
+    assert!(
+        x.list_buildings().expect("list").is_empty(),
+        "no building may be created either"
+    );
+}
+
+#[test]
+fn conflicting_histories_are_refused_whole() {
+    let (a, _) = device(1_000, 3);
+    let good = export(&a, "phone-a", "Ann");
+    let x = Store::open_in_memory().expect("x");
+    x.import_bundle(&good, "a").expect("a");
+    let before = (content(&x), counts(&x));
+    // Same session uid, different history: rewrite a time and recompute the checksum.
+    let mut doc: serde_json::Value = serde_json::from_str(&good).expect("json");
+    doc["body"]["sessions"][0]["events"][1]["at_ms"] = 999_999.into();
+    let events = doc["body"]["sessions"][0]["events"]
+        .as_array_mut()
+        .expect("events");
+    events.push(serde_json::json!({"seq": events.len() + 1, "at_ms": 1_000_000, "event": {"kind": "finish"}}));
+    let body = doc["body"].to_string();
+    use sha2::Digest;
+    doc["sha256"] = sha2::Sha256::digest(body.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect::<String>()
+        .into();
+    let e = x
+        .import_bundle(&doc.to_string(), "forged")
+        .expect_err("conflict")
+        .to_string();
+    assert!(e.contains("conflicting histories at event 2"), "{e}");
+    assert_eq!((content(&x), counts(&x)), before);
+}
