@@ -216,16 +216,21 @@ impl Frame {
 }
 
 /// The document head, title, axes, ticks, labels (everything but the data).
-fn frame_svg(
-    s: &mut String,
-    f: &Frame,
-    title: &str,
-    subtitle: &str,
-    x_label: &str,
-    y_label: &str,
-    xt: &[f64],
-    yt: &[f64],
-) {
+/// The texts around a chart.
+struct Labels<'a> {
+    title: &'a str,
+    subtitle: &'a str,
+    x: &'a str,
+    y: &'a str,
+}
+
+fn frame_svg(s: &mut String, f: &Frame, labels: &Labels, xt: &[f64], yt: &[f64]) {
+    let Labels {
+        title,
+        subtitle,
+        x: x_label,
+        y: y_label,
+    } = *labels;
     // `write!` into a String cannot fail; the results are ignored on purpose.
     let _ = writeln!(
         s,
@@ -363,16 +368,13 @@ impl LineChart {
             log_y: self.log_y,
         };
         let mut s = String::new();
-        frame_svg(
-            &mut s,
-            &f,
-            &self.title,
-            "",
-            &self.x_label,
-            &self.y_label,
-            &xt,
-            &yt,
-        );
+        let labels = Labels {
+            title: &self.title,
+            subtitle: "",
+            x: &self.x_label,
+            y: &self.y_label,
+        };
+        frame_svg(&mut s, &f, &labels, &xt, &yt);
         for r in self.ref_lines.iter().filter(|r| ok(r.y)) {
             let py = f.py(r.y);
             let _ = writeln!(
@@ -466,16 +468,13 @@ impl ScatterChart {
             log_y: false,
         };
         let mut s = String::new();
-        frame_svg(
-            &mut s,
-            &f,
-            &self.title,
-            &self.subtitle,
-            &self.x_label,
-            &self.y_label,
-            &xt,
-            &yt,
-        );
+        let labels = Labels {
+            title: &self.title,
+            subtitle: &self.subtitle,
+            x: &self.x_label,
+            y: &self.y_label,
+        };
+        frame_svg(&mut s, &f, &labels, &xt, &yt);
         for series in &self.series {
             let col = colour(series.colour);
             let _ = writeln!(s, r#"<g class="series" data-name="{}">"#, esc(&series.name));

@@ -241,10 +241,12 @@ pub struct SummaryRow {
     pub elapsed_max_ms: u64,
 }
 
-/// Pearson correlation of utility and mean localization error over a set of runs.
+/// Pearson correlation of utility and mean localization error over a set of runs: all
+/// runs, the runs of each budget, and the runs of each algorithm (in that order).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Correlation {
-    /// `all` or `budget=<B>`.
+    /// `all`, `budget=<B>` (all algorithms at one budget) or `algorithm=<A>` (one
+    /// algorithm over all budgets).
     pub scope: String,
     pub n: usize,
     /// `None` when undefined (fewer than two runs, or no spread in one of the two).
@@ -456,6 +458,12 @@ fn correlations(config: &ExperimentConfig, runs: &[RunRecord]) -> Vec<Correlatio
         out.push(corr(
             format!("budget={b}"),
             runs.iter().filter(|r| r.budget_m == b).collect(),
+        ));
+    }
+    for &a in &config.algorithms {
+        out.push(corr(
+            format!("algorithm={a}"),
+            runs.iter().filter(|r| r.algorithm == a).collect(),
         ));
     }
     out
@@ -709,13 +717,9 @@ impl Experiment {
         let per_budget: Vec<String> = self
             .correlations
             .iter()
-            .skip(1)
-            .map(|c| {
-                format!(
-                    "{} m: {}",
-                    c.scope.trim_start_matches("budget="),
-                    r(c.pearson_r)
-                )
+            .filter_map(|c| {
+                let b = c.scope.strip_prefix("budget=")?;
+                Some(format!("{b} m: {}", r(c.pearson_r)))
             })
             .collect();
         ScatterChart {

@@ -88,8 +88,11 @@ fn seconds(s: &str, what: &str) -> Result<Duration> {
     }
 }
 
+/// The common time limit and the per-algorithm ones.
+type TimeLimits = (Option<Duration>, Vec<(Algorithm, Duration)>);
+
 /// Parses `--time-limit`: `SECONDS` and/or `ALGORITHM=SECONDS`, comma-separated.
-fn parse_time_limits(spec: &str) -> Result<(Option<Duration>, Vec<(Algorithm, Duration)>)> {
+fn parse_time_limits(spec: &str) -> Result<TimeLimits> {
     let mut all = None;
     let mut per = Vec::new();
     for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
