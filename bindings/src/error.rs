@@ -89,9 +89,10 @@ mod tests {
                 },
                 |t| matches!(t, T::InvalidBuilding(_)),
             ),
-            (E::invalid("b.json", "edges[1].a", "unknown vertex \"q\""), |t| {
-                matches!(t, T::InvalidBuilding(_))
-            }),
+            (
+                E::invalid("b.json", "edges[1].a", "unknown vertex \"q\""),
+                |t| matches!(t, T::InvalidBuilding(_)),
+            ),
             (
                 E::InvalidWalk {
                     step: 2,
@@ -113,7 +114,9 @@ mod tests {
             ),
             (E::Fit("few".into()), |t| matches!(t, T::Fit(_))),
             (E::Cancelled, |t| matches!(t, T::Cancelled(_))),
-            (E::NotFound("plan 3".into()), |t| matches!(t, T::NotFound(_))),
+            (E::NotFound("plan 3".into()), |t| {
+                matches!(t, T::NotFound(_))
+            }),
             (E::AlreadyExists("building \"A\"".into()), |t| {
                 matches!(t, T::AlreadyExists(_))
             }),
@@ -131,7 +134,9 @@ mod tests {
                 },
                 |t| matches!(t, T::Session(_)),
             ),
-            (E::Numerical("not PD".into()), |t| matches!(t, T::Internal(_))),
+            (E::Numerical("not PD".into()), |t| {
+                matches!(t, T::Internal(_))
+            }),
         ];
         for (e, is) in cases {
             let msg = e.to_string();

@@ -14,6 +14,7 @@ mod model;
 mod plan;
 mod session;
 mod store;
+mod team;
 
 pub use building::*;
 pub use error::{Result, TrailprintError};
@@ -21,5 +22,6 @@ pub use model::*;
 pub use plan::*;
 pub use session::*;
 pub use store::*;
+pub use team::*;
 
 uniffi::setup_scaffolding!();

@@ -190,15 +190,12 @@ pub fn walk_utility(
     kernel: Option<KernelParams>,
 ) -> Result<f64> {
     let b = Building::from_json(&building_json, &origin)?;
-    let kernel = kernel
-        .map(Into::into)
-        .or(b.kernel)
-        .ok_or_else(|| {
-            TrailprintError::Fit(format!(
-                "building {:?} has no kernel: fit one first or pass it",
-                b.name
-            ))
-        })?;
+    let kernel = kernel.map(Into::into).or(b.kernel).ok_or_else(|| {
+        TrailprintError::Fit(format!(
+            "building {:?} has no kernel: fit one first or pass it",
+            b.name
+        ))
+    })?;
     let indices = b.resolve_walk(&walk)?;
     let engine = trailprint::utility::UtilityEngine::new(Arc::new(b), kernel, surveyor.into())?;
     Ok(engine.utility(&indices)?)

@@ -9,9 +9,9 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use trailprint::session::{self as core, Event, Session};
 use trailprint::store;
 
+use crate::Result;
 use crate::model::SurveyorProfile;
 use crate::store::TrailprintStore;
-use crate::Result;
 
 /// How a session judges and reacts to the surveyor leaving the plan.
 #[derive(Debug, Clone, Copy, uniffi::Record)]
@@ -613,4 +613,3 @@ impl TrailprintStore {
             .collect())
     }
 }
-

@@ -6,10 +6,10 @@ use std::sync::Arc;
 use trailprint::Building;
 use trailprint::store::{self, BuildingInfo, FitRecord, ImportOptions, Store};
 
+use crate::Result;
 use crate::building::{BuildingMap, KernelParams};
 use crate::model::FitSummary;
 use crate::model::SurveyorProfile;
-use crate::Result;
 
 /// A stored building's summary.
 #[derive(Debug, Clone, uniffi::Record)]

@@ -11,6 +11,9 @@ import dev.trailprint.ffi.SessionInfo
 import dev.trailprint.ffi.SessionOptions
 import dev.trailprint.ffi.SurveySession
 import dev.trailprint.ffi.SurveyorProfile
+import dev.trailprint.ffi.BundleImportSummary
+import dev.trailprint.ffi.TeamPlanRequest
+import dev.trailprint.ffi.TeamPlanSummary
 import dev.trailprint.ffi.TrailprintStore
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.Dispatchers
@@ -100,6 +103,17 @@ class Trailprint(
     suspend fun resumeSession(sessionId: Long): SurveySession = withContext(io) { store.resumeSession(sessionId) }
 
     suspend fun sessions(buildingId: Long): List<SessionInfo> = withContext(io) { store.listSessions(buildingId) }
+
+    /** Plans walks for several surveyors that complement each other; one saved plan per member. */
+    suspend fun planTeam(request: TeamPlanRequest): TeamPlanSummary = withContext(io) { store.planTeam(request) }
+
+    /** A bundle of the building's survey sessions (JSON text) to share with another device. */
+    suspend fun exportBundle(buildingId: Long, device: String? = null, surveyorName: String? = null): String =
+        withContext(io) { store.exportBundle(buildingId, device, surveyorName) }
+
+    /** Merges a bundle from another device; importing it again changes nothing. */
+    suspend fun importBundle(json: String, origin: String): BundleImportSummary =
+        withContext(io) { store.importBundle(json, origin) }
 
     override fun close() = store.close()
 }
