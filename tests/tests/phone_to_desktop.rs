@@ -1,0 +1,138 @@
+//! End to end across the crates: a phone (the bindings layer, as the Kotlin app drives it)
+//! plans and walks a survey on a file database, the app is "killed" and resumed from a
+//! fresh store object, the session is exported as a bundle, and a desktop database (the
+//! core store, as the command line uses it) merges it and plans the next surveyor's walk
+//! conditioned on what was collected.
+
+use std::sync::Arc;
+
+use trailprint::plan::{PlanRequest, plan, plan_with_prior};
+use trailprint::store::{BuildingRef, Store};
+use trailprint_ffi::{
+    PlanAlgorithm, PlanRequest as FfiPlanRequest, TrailprintStore, WifiReading,
+    default_robot_profile,
+};
+
+fn demo_json() -> String {
+    trailprint::synth::DEMO_BUILDING_JSON.to_string()
+}
+
+#[test]
+fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let phone_db = dir.path().join("phone.db").display().to_string();
+
+    // The phone imports the demo building and plans through the bindings.
+    let phone = TrailprintStore::open(phone_db.clone()).expect("open");
+    let b = phone
+        .import_building_json(demo_json(), "demo".into(), false)
+        .expect("import");
+    let building = trailprint::Building::from_json(&demo_json(), "demo").expect("demo");
+    let (start, end) = (
+        building.vertices[0].id.clone(),
+        building.vertices[5].id.clone(),
+    );
+    let job = phone.clone().new_plan(FfiPlanRequest {
+        building_id: b.id,
+        start: start.clone(),
+        end: end.clone(),
+        budget_m: 25.0,
+        surveyor: default_robot_profile(),
+        algorithm: PlanAlgorithm::Genetic,
+        seed: 3,
+        time_limit_s: None,
+    });
+    let planned = job.run(None).expect("plan");
+    assert_eq!(planned.walk.first(), Some(&start));
+    assert!(planned.length_m <= 25.0 + 1e-9);
+
+    // The robot walks the first part of the plan, scanning as it goes.
+    let session = phone
+        .clone()
+        .start_session(planned.id, default_robot_profile(), None)
+        .expect("session");
+    let sid = session.id();
+    let mut t = 1_700_000_000_000i64;
+    for (i, v) in planned.walk.iter().take(4).enumerate() {
+        let vid = building.vertex_index(v).expect("vertex");
+        let p = building.vertices[vid].pos;
+        t += 1_000;
+        session.robot_pose(t, p.x, p.y, p.floor).expect("pose");
+        session
+            .scan(
+                t + 10,
+                vec![WifiReading {
+                    bssid: "ap-01".into(),
+                    rss_dbm: -50.0 - i as f64,
+                }],
+            )
+            .expect("scan");
+    }
+    let collected_before_kill = session.samples().len();
+    assert!(collected_before_kill >= 4);
+    drop(session);
+    drop(job);
+    drop(phone);
+
+    // The app was killed; a fresh store object resumes exactly where it was.
+    let phone = TrailprintStore::open(phone_db.clone()).expect("reopen");
+    let session = phone.clone().resume_session(sid).expect("resume");
+    assert_eq!(session.samples().len(), collected_before_kill);
+    session.finish(t + 5_000).expect("finish");
+
+    // Export from the phone (core store on the same file), merge on the desktop.
+    let phone_core = Store::open(&phone_db).expect("core store");
+    let bundle = phone_core
+        .export_bundle(
+            BuildingRef::Id(b.id),
+            &trailprint::store::ExportOptions::default(),
+        )
+        .expect("bundle");
+    let desk = Store::open(dir.path().join("desk.db")).expect("desk");
+    let r = desk.import_bundle(&bundle, "phone.json").expect("import");
+    assert!(r.building_created);
+    assert_eq!(r.sessions_added, 1);
+    let collected = desk
+        .list_collected(BuildingRef::Name(&building.name), None)
+        .expect("collected");
+    assert_eq!(collected.len(), collected_before_kill);
+
+    // The desktop plans the next walk conditioned on what was collected: the same request
+    // is now worth less (the data is no longer thin where the phone walked).
+    let kernel = trailprint::gp::fit_kernel(&building.pilot)
+        .expect("fit")
+        .kernel;
+    let bld = Arc::new(
+        desk.get_building(BuildingRef::Name(&building.name))
+            .expect("building"),
+    );
+    let mut req = PlanRequest::new(&start, &end, 25.0, kernel);
+    req.algorithm = trailprint::plan::Algorithm::Genetic;
+    req.seed = 3;
+    let prior = desk
+        .collected_observations(BuildingRef::Name(&building.name), &kernel)
+        .expect("prior");
+    assert_eq!(prior.len(), collected_before_kill);
+    let fresh = plan(bld.clone(), &req, &trailprint::plan::Control::new()).expect("plan");
+    let informed =
+        plan_with_prior(bld, &req, &prior, &trailprint::plan::Control::new()).expect("plan");
+    let engine = trailprint::utility::UtilityEngine::new(
+        Arc::new(building.clone()),
+        kernel,
+        trailprint::samples::SurveyorModel::robot(),
+    )
+    .expect("engine");
+    let with_prior = trailprint::utility::UtilityEngine::with_prior(
+        Arc::new(building),
+        kernel,
+        trailprint::samples::SurveyorModel::robot(),
+        &prior,
+    )
+    .expect("engine");
+    let gain =
+        |w: &[usize]| with_prior.utility(w).expect("u") - with_prior.prior_utility().expect("u");
+    // The walk planned with the prior adds at least as much on top of the collected data
+    // as the walk planned without it.
+    assert!(gain(&informed.walk_indices) >= gain(&fresh.walk_indices) - 1e-9);
+    assert!(engine.utility(&fresh.walk_indices).expect("u") > 0.0);
+}
