@@ -21,7 +21,7 @@ pub struct Args {
     #[arg(long, default_value_t = 120.0)]
     budget: f64,
     /// Planner (auto, greedy, genetic, recursive-greedy, ero, exact).
-    #[arg(long, default_value = "auto", value_parser = |s: &str| Algorithm::from_name(s).map_err(|e| e.to_string()))]
+    #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 1)]

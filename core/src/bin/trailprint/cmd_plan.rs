@@ -1,30 +1,22 @@
 //! `trailprint plan`: plan a survey walk (SPEC section 7 result JSON with `--json`).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use clap::Args as ClapArgs;
 use trailprint::plan::{Algorithm, Params, PlanRequest, plan_with_prior};
 use trailprint::store::PlanRecord;
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, RouteOpts, json_line};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     #[command(flatten)]
     building: BuildingOpts,
-    /// Start vertex id.
-    #[arg(long)]
-    start: String,
-    /// End vertex id (may equal the start).
-    #[arg(long)]
-    end: String,
-    /// Budget: the longest walk allowed, metres.
-    #[arg(long)]
-    budget: f64,
+    #[command(flatten)]
+    route: RouteOpts,
     /// auto, greedy, genetic, recursive-greedy, ero or exact.
-    #[arg(long, default_value = "auto", value_parser = parse_algorithm)]
+    #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Genetic: population size.
     #[arg(long, default_value_t = 200)]
@@ -62,27 +54,15 @@ pub struct Args {
     json: bool,
 }
 
-fn parse_algorithm(s: &str) -> std::result::Result<Algorithm, String> {
-    Algorithm::from_name(s).map_err(|e| e.to_string())
-}
-
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
     let model = a.model.model()?;
     let (kernel, source) = a.kernel.resolve(&b)?;
-    let time_limit = match a.time_limit {
-        None => None,
-        Some(t) if t.is_finite() && t >= 0.0 => Some(Duration::from_secs_f64(t)),
-        Some(t) => {
-            return Err(Error::InvalidRequest(format!(
-                "--time-limit must be a non-negative number of seconds, got {t}"
-            )));
-        }
-    };
+    let time_limit = crate::opts::time_limit(a.time_limit)?;
     let req = PlanRequest {
-        start: a.start,
-        end: a.end,
-        budget: a.budget,
+        start: a.route.start,
+        end: a.route.end,
+        budget: a.route.budget,
         model,
         kernel,
         algorithm: a.algorithm,

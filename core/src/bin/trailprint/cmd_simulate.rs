@@ -22,7 +22,7 @@ use trailprint::session::{
 use trailprint::store::{BuildingRef, ImportOptions, PlanRecord, Store, now_ms};
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelKind, ModelOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, ModelKind, ModelOpts, RouteOpts, json_line};
 use crate::store_cli::{building_ref, is_file_spec, open_store};
 
 #[derive(ClapArgs, Debug)]
@@ -35,15 +35,8 @@ use crate::store_cli::{building_ref, is_file_spec, open_store};
 pub struct Args {
     #[command(flatten)]
     building: BuildingOpts,
-    /// Start vertex id.
-    #[arg(long)]
-    start: String,
-    /// End vertex id (may equal the start).
-    #[arg(long)]
-    end: String,
-    /// Budget of the walk, metres.
-    #[arg(long)]
-    budget: f64,
+    #[command(flatten)]
+    route: RouteOpts,
     #[command(flatten)]
     model: ModelOpts,
     #[command(flatten)]
@@ -55,7 +48,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Planner of the initial walk (auto, greedy, genetic, recursive-greedy, ero, exact).
-    #[arg(long, default_value = "auto", value_parser = |s: &str| Algorithm::from_name(s).map_err(|e| e.to_string()))]
+    #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Time limit of the initial plan, seconds (auto: 2 s by default).
     #[arg(long, value_name = "SECONDS")]
@@ -278,19 +271,11 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         "session-greedy" => Arc::new(GreedyReplanner),
         name => Arc::new(PlannerReplanner::new(Algorithm::from_name(name)?)),
     };
-    let time_limit = match a.time_limit {
-        None => None,
-        Some(t) if t.is_finite() && t >= 0.0 => Some(Duration::from_secs_f64(t)),
-        Some(t) => {
-            return Err(Error::InvalidRequest(format!(
-                "--time-limit must be a non-negative number of seconds, got {t}"
-            )));
-        }
-    };
+    let time_limit = crate::opts::time_limit(a.time_limit)?;
     let req = PlanRequest {
-        start: a.start.clone(),
-        end: a.end.clone(),
-        budget: a.budget,
+        start: a.route.start.clone(),
+        end: a.route.end.clone(),
+        budget: a.route.budget,
         model: surveyor.model(),
         kernel,
         algorithm: a.algorithm,
@@ -325,11 +310,11 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             planned.algorithm,
             planned.walk.len(),
             planned.length_m,
-            a.budget,
+            a.route.budget,
             planned.utility_nats
         );
     }
-    let mut display = Display::new(a.json, a.budget);
+    let mut display = Display::new(a.json, a.route.budget);
     let print_acks = a.print_acks;
     let (summary, report) = simulate(&mut session, &world, &sim, |s, ev, ack| {
         if print_acks {
@@ -361,7 +346,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             "status": summary.status,
             "algorithm": planned.algorithm,
             "plan_length_m": planned.length_m,
-            "budget_m": a.budget,
+            "budget_m": a.route.budget,
             "walked_m": summary.walked_m,
             "true_walked_m": report.true_walked_m,
             "samples": summary.samples,
@@ -387,7 +372,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         let s = &summary;
         println!(
             "{:?}: walked {:.1} m of the {} m budget ({:.1} m really) in {:.0} s simulated",
-            s.status, s.walked_m, a.budget, report.true_walked_m, report.sim_time_s
+            s.status, s.walked_m, a.route.budget, report.true_walked_m, report.sim_time_s
         );
         if surveyor.is_human() {
             println!(

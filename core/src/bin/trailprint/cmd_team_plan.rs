@@ -2,12 +2,11 @@
 //! complement each other (or, with `--independent`, plan each alone for comparison).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use clap::Args as ClapArgs;
+use trailprint::Result;
 use trailprint::plan::{Algorithm, PlanRequest};
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
-use trailprint::{Error, Result};
 
 use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
 
@@ -25,7 +24,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     rounds: usize,
     /// Planner for each surveyor.
-    #[arg(long, default_value = "genetic", value_parser = |s: &str| Algorithm::from_name(s).map_err(|e| e.to_string()))]
+    #[arg(long, default_value = "genetic", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Time limit of each planner run, seconds.
     #[arg(long)]
@@ -52,15 +51,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     base.model = a.model.model()?;
     base.algorithm = a.algorithm;
     base.seed = a.seed;
-    base.time_limit = match a.time_limit {
-        None => None,
-        Some(t) if t.is_finite() && t >= 0.0 => Some(Duration::from_secs_f64(t)),
-        Some(t) => {
-            return Err(Error::InvalidRequest(format!(
-                "--time-limit must be a non-negative number of seconds, got {t}"
-            )));
-        }
-    };
+    base.time_limit = crate::opts::time_limit(a.time_limit)?;
     let prior = if a.ignore_collected {
         Vec::new()
     } else {

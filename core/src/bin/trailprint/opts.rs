@@ -120,3 +120,33 @@ pub fn split_walk(s: &str) -> Vec<String> {
 pub fn json_line<T: serde::Serialize>(v: &T) -> Result<String> {
     serde_json::to_string(v).map_err(|e| Error::InvalidRequest(format!("JSON output: {e}")))
 }
+
+/// Parses a planner name for clap (`auto`, `greedy`, `genetic`, ...).
+pub fn parse_algorithm(s: &str) -> std::result::Result<trailprint::plan::Algorithm, String> {
+    trailprint::plan::Algorithm::from_name(s).map_err(|e| e.to_string())
+}
+
+/// `--time-limit SECONDS` as a duration; a negative or non-finite value is an error.
+pub fn time_limit(seconds: Option<f64>) -> Result<Option<std::time::Duration>> {
+    match seconds {
+        None => Ok(None),
+        Some(t) if t.is_finite() && t >= 0.0 => Ok(Some(std::time::Duration::from_secs_f64(t))),
+        Some(t) => Err(Error::InvalidRequest(format!(
+            "--time-limit must be a non-negative number of seconds, got {t}"
+        ))),
+    }
+}
+
+/// Where a walk starts and ends, and how long it may be.
+#[derive(ClapArgs, Debug, Clone)]
+pub struct RouteOpts {
+    /// Start vertex id.
+    #[arg(long)]
+    pub start: String,
+    /// End vertex id (may equal the start).
+    #[arg(long)]
+    pub end: String,
+    /// Budget: the longest walk allowed, metres.
+    #[arg(long)]
+    pub budget: f64,
+}
