@@ -25,6 +25,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::blocked;
+use super::dense;
 use super::reference::Observation;
 use super::simd::{self, Isa, Points};
 use crate::building::Building;
@@ -40,6 +41,100 @@ struct Ctx {
     sn2: f64,
     vertices: Points,
     nv: usize,
+    isa: Isa,
+}
+
+/// What the dense whole-walk path ([`super::dense`]) copies instead of recomputing: the
+/// prior observations' kernel blocks and `A`, all raw (not factored).
+#[derive(Debug, Clone, Default)]
+struct Prior {
+    pts: Points,
+    /// `K_DD + N_D`, row-major `nd x nd` (upper triangle used).
+    dd: Vec<f64>,
+    /// `K_DV`, row-major `nd x nv`.
+    dv: Vec<f64>,
+    /// `A = K_VV + sn2 I`, row-major `nv x nv` (upper triangle used).
+    a: Vec<f64>,
+}
+
+thread_local! {
+    /// The dense path's matrix, kept per thread: allocating (and page-faulting) a fresh
+    /// megabyte per evaluation would cost a sizeable share of the evaluation itself.
+    static DENSE: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// `ln det Sigma` for the prior plus `obs`, by one dense factorisation of the joint
+/// covariance of `[D, obs, V]` (see [`super::dense`]).
+#[inline(always)]
+fn dense_logdet<const FMA: bool>(ctx: &Ctx, prior: &Prior, obs: &[(Point, f64)]) -> Option<f64> {
+    let nd = prior.pts.len();
+    let nr = obs.len();
+    let nv = ctx.nv;
+    let n = nd + nr + nv;
+    let layout = dense::Layout::new(n);
+    let ld = layout.ld;
+    let mut rp = Points::default();
+    for (p, _) in obs {
+        rp.push(p);
+    }
+    // Taken out of the thread-local rather than filled in a closure: a closure would not
+    // inherit the caller's target features, and the kernel rows would lose FMA and SIMD.
+    let mut a = DENSE.take();
+    {
+        if a.len() < layout.len() {
+            a.resize(layout.len(), 0.0);
+        }
+        for i in 0..nd {
+            let row = &mut a[i * ld..(i + 1) * ld];
+            row[i..nd].copy_from_slice(&prior.dd[i * nd + i..(i + 1) * nd]);
+            let pi = (prior.pts.x[i], prior.pts.y[i], prior.pts.floor[i]);
+            simd::kernel_row_isa::<FMA>(
+                ctx.isa,
+                ctx.sf2,
+                ctx.inv_ell,
+                pi,
+                &rp,
+                0,
+                &mut row[nd..nd + nr],
+            );
+            row[nd + nr..n].copy_from_slice(&prior.dv[i * nv..(i + 1) * nv]);
+            row[n..].fill(0.0);
+        }
+        for (r, (_, noise)) in obs.iter().enumerate() {
+            let i = nd + r;
+            let row = &mut a[i * ld..(i + 1) * ld];
+            let pr = (rp.x[r], rp.y[r], rp.floor[r]);
+            simd::kernel_row_isa::<FMA>(
+                ctx.isa,
+                ctx.sf2,
+                ctx.inv_ell,
+                pr,
+                &rp,
+                r,
+                &mut row[i..nd + nr],
+            );
+            row[i] += ctx.sn2 + noise;
+            simd::kernel_row_isa::<FMA>(
+                ctx.isa,
+                ctx.sf2,
+                ctx.inv_ell,
+                pr,
+                &ctx.vertices,
+                0,
+                &mut row[nd + nr..n],
+            );
+            row[n..].fill(0.0);
+        }
+        for v in 0..nv {
+            let i = nd + nr + v;
+            let row = &mut a[i * ld..(i + 1) * ld];
+            row[i..n].copy_from_slice(&prior.a[v * nv + v..(v + 1) * nv]);
+            row[n..].fill(0.0);
+        }
+    }
+    let out = dense::factor(ctx.isa, &mut a, layout, nd + nr);
+    DENSE.set(a);
+    out
 }
 
 /// A growing factorisation: rows of `L` and `W` for the observations so far, and
@@ -64,6 +159,17 @@ impl Factor {
     /// Whether the factor holds no observation.
     pub fn is_empty(&self) -> bool {
         self.pts.is_empty()
+    }
+
+    /// An empty factor (for operations that do not touch one).
+    fn clone_empty(&self) -> Factor {
+        Factor {
+            pts: Points::default(),
+            l: Vec::new(),
+            inv_diag: Vec::new(),
+            w: Vec::new(),
+            sigma: Vec::new(),
+        }
     }
 
     fn truncate(&mut self, n: usize, nv: usize) {
@@ -271,6 +377,8 @@ enum DispatchArg<'a> {
     /// `Sigma` is updated, the factor must not be extended afterwards).
     Add(&'a [(Point, f64)], bool),
     LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
+    /// `ln det Sigma` of the prior plus these observations, by the dense path.
+    Dense(&'a Prior, &'a [(Point, f64)]),
 }
 
 enum DispatchOut {
@@ -285,6 +393,7 @@ fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> Dis
         DispatchArg::LogDet(extra, scratch) => {
             DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
         }
+        DispatchArg::Dense(prior, obs) => DispatchOut::LogDet(dense_logdet::<FMA>(ctx, prior, obs)),
     }
 }
 
@@ -323,6 +432,7 @@ pub struct UtilityEngine {
     isa: Isa,
     logdet_a: f64,
     base: Factor,
+    prior: Prior,
 }
 
 impl UtilityEngine {
@@ -346,14 +456,15 @@ impl UtilityEngine {
             vertices.push(&v.pos);
         }
         let nv = vertices.len();
+        let isa = Isa::detect();
         let ctx = Ctx {
             sf2: kernel.sf2,
             inv_ell: 1.0 / kernel.ell,
             sn2: kernel.sn2,
             vertices,
             nv,
+            isa,
         };
-        let isa = Isa::detect();
         // A = K_VV + sn2 I (the upper triangle is what the kernels read).
         let vpts = building.vertex_points();
         let mut a = vec![0.0; nv * nv];
@@ -386,6 +497,23 @@ impl UtilityEngine {
         };
         let mut obs: Vec<(Point, f64)> = building.pilot.iter().map(|f| (f.point(), 0.0)).collect();
         obs.extend(prior.iter().map(|o| (o.pos, o.extra_noise)));
+        let nd = obs.len();
+        let mut dense_prior = Prior {
+            pts: Points::default(),
+            dd: vec![0.0; nd * nd],
+            dv: vec![0.0; nd * nv],
+            a: a.clone(),
+        };
+        for (i, (p, noise)) in obs.iter().enumerate() {
+            dense_prior.pts.push(p);
+            for (j, (q, _)) in obs.iter().enumerate() {
+                dense_prior.dd[i * nd + j] =
+                    kernel.k(p, q) + if i == j { kernel.sn2 + noise } else { 0.0 };
+            }
+            for (j, v) in vpts.iter().enumerate() {
+                dense_prior.dv[i * nv + j] = kernel.k(p, v);
+            }
+        }
         let mut engine = UtilityEngine {
             building,
             kernel,
@@ -394,6 +522,7 @@ impl UtilityEngine {
             isa,
             logdet_a,
             base,
+            prior: dense_prior,
         };
         let mut base = std::mem::replace(
             &mut engine.base,
@@ -490,9 +619,24 @@ impl UtilityEngine {
         }
         let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
         let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
-        let mut f = self.base.clone();
-        self.add_rows(&mut f, &obs, false)?;
-        self.utility_of(&mut f, None, &mut Vec::new())
+        self.dense_utility(&obs)
+    }
+
+    /// `f_D` of the prior plus `obs` by one dense factorisation ([`super::dense`]): the
+    /// fastest way to evaluate a whole walk from scratch.
+    fn dense_utility(&self, obs: &[(Point, f64)]) -> Result<f64> {
+        let mut unused = self.base.clone_empty();
+        match dispatch(
+            self.isa,
+            &mut unused,
+            &self.ctx,
+            DispatchArg::Dense(&self.prior, obs),
+        ) {
+            DispatchOut::LogDet(Some(ld)) => Ok((0.5 * (self.logdet_a - ld)).max(0.0)),
+            _ => Err(Error::Numerical(
+                "posterior covariance is not positive definite".into(),
+            )),
+        }
     }
 
     /// `f_D` of many walks, in parallel.
@@ -503,10 +647,8 @@ impl UtilityEngine {
     /// `f_D` of the prior plus arbitrary observations (for example samples actually
     /// collected, with their real label noise).
     pub fn utility_of_observations(&self, obs: &[Observation]) -> Result<f64> {
-        let mut f = self.base.clone();
         let list: Vec<(Point, f64)> = obs.iter().map(|o| (o.pos, o.extra_noise)).collect();
-        self.add(&mut f, &list)?;
-        self.utility_of(&mut f, None, &mut Vec::new())
+        self.dense_utility(&list)
     }
 }
 

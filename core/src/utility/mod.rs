@@ -8,6 +8,7 @@ pub mod reference;
 
 pub use reference::{Observation, reference_utility};
 pub mod blocked;
+pub mod dense;
 pub mod engine;
 pub mod simd;
 
