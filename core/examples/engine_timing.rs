@@ -83,6 +83,9 @@ fn main() {
     time("engine whole walk (batch)", 300, || {
         std::hint::black_box(e.utility(&walk).expect("u"));
     });
+    time("sample positions only", 300, || {
+        std::hint::black_box(sample_walk(&b, &walk, &model, &k).expect("s"));
+    });
     time("engine whole walk (edge by edge)", 100, || {
         let mut st = e.start(walk[0]).expect("s");
         for &v in &walk[1..] {

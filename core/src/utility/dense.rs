@@ -405,6 +405,15 @@ mod tests {
         check(Isa::detect());
     }
 
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_factor_matches_nalgebra_where_the_cpu_has_it() {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            check(Isa::Avx2Fma);
+        }
+    }
+
     #[test]
     fn indefinite_matrix_is_reported_for_every_isa() {
         for isa in [Isa::Generic, Isa::detect()] {

@@ -7,7 +7,16 @@
 //! `f = 1/2 ln det A - 1/2 ln det(A - W^T W)`, with `A = K_VV + sn2 I`,
 //! `W = L^-1 K_SV` and `L L^T = K_SS + N_S` (S = pilot locations, then the walk's samples).
 //!
-//! # Why it is fast
+//! # Two paths
+//! * A whole walk evaluated from scratch ([`UtilityEngine::utility`],
+//!   [`UtilityEngine::utilities`], [`UtilityEngine::utility_of_observations`]) takes the
+//!   dense path of [`super::dense`]: one factorisation of the joint covariance of
+//!   `[prior, samples, vertices]`, whose last rows give `ln det Sigma`. It runs at about
+//!   90% of the FMA peak of an AVX-512 core and is the genetic planner's workhorse.
+//! * A walk grown vertex by vertex ([`WalkState`]) keeps a factor that later steps
+//!   extend, as below; the greedy planners and branch and bound use it.
+//!
+//! # Why the incremental path is fast
 //! * The pilot locations come first in `S`, so their rows of `L` and `W`, and
 //!   `Sigma_D = A - W_D^T W_D`, are computed once per building ([`UtilityEngine::new`]).
 //! * A walk's samples are appended one row at a time ([`Factor`]): a row of `L` costs
@@ -231,12 +240,7 @@ fn rank1_upper<const FMA: bool>(sigma: &mut [f64], w: &[f64], nv: usize) {
 /// the factor so far, the Schur complement of the new block and its Cholesky, then the
 /// new rows of `L` and `W`, and the downdate of `Sigma`.
 #[inline(always)]
-fn add_batch<const FMA: bool>(
-    f: &mut Factor,
-    ctx: &Ctx,
-    obs: &[(Point, f64)],
-    keep_rows: bool,
-) -> bool {
+fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> bool {
     let n0 = f.pts.len();
     let m = obs.len();
     let nv = ctx.nv;
@@ -306,10 +310,6 @@ fn add_batch<const FMA: bool>(
     }
     blocked::solve_upper_transposed::<FMA>(&s, m, &mut wn, nv);
     blocked::syrk_upper_sub::<FMA>(&mut f.sigma, nv, &wn, m);
-    if !keep_rows {
-        // Only Sigma is wanted (a whole walk evaluated once): skip the strided gather.
-        return true;
-    }
     // Append the rows of L: [X^T row i, U column i].
     f.l.reserve(m * n0 + m * (m + 1) / 2);
     for i in 0..m {
@@ -328,14 +328,9 @@ fn add_batch<const FMA: bool>(
 
 /// Adds observations to a factor, downdating its `Sigma`.
 #[inline(always)]
-fn add_all<const FMA: bool>(
-    f: &mut Factor,
-    ctx: &Ctx,
-    obs: &[(Point, f64)],
-    keep_rows: bool,
-) -> bool {
+fn add_all<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -> bool {
     if obs.len() >= blocked::BLOCK {
-        return add_batch::<FMA>(f, ctx, obs, keep_rows);
+        return add_batch::<FMA>(f, ctx, obs);
     }
     for (p, noise) in obs {
         if !push_rows::<FMA>(f, ctx, p, *noise) {
@@ -373,9 +368,8 @@ fn logdet_sigma<const FMA: bool>(
 
 /// Arguments of the dispatched operations (one signature keeps the macro simple).
 enum DispatchArg<'a> {
-    /// Observations to add, and whether the factor's rows must be kept (false: only
-    /// `Sigma` is updated, the factor must not be extended afterwards).
-    Add(&'a [(Point, f64)], bool),
+    /// Observations to append to the factor (rows of `L` and `W`, downdate of `Sigma`).
+    Add(&'a [(Point, f64)]),
     LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
     /// `ln det Sigma` of the prior plus these observations, by the dense path.
     Dense(&'a Prior, &'a [(Point, f64)]),
@@ -389,7 +383,7 @@ enum DispatchOut {
 #[inline(always)]
 fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
     match a {
-        DispatchArg::Add(obs, keep) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs, keep)),
+        DispatchArg::Add(obs) => DispatchOut::Added(add_all::<FMA>(f, ctx, obs)),
         DispatchArg::LogDet(extra, scratch) => {
             DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
         }
@@ -540,11 +534,7 @@ impl UtilityEngine {
     }
 
     fn add(&self, f: &mut Factor, obs: &[(Point, f64)]) -> Result<()> {
-        self.add_rows(f, obs, true)
-    }
-
-    fn add_rows(&self, f: &mut Factor, obs: &[(Point, f64)], keep_rows: bool) -> Result<()> {
-        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs, keep_rows)) {
+        match dispatch(self.isa, f, &self.ctx, DispatchArg::Add(obs)) {
             DispatchOut::Added(true) => Ok(()),
             _ => Err(Error::Numerical(
                 "K_SS + N_S lost positive definiteness".into(),
