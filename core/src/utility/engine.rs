@@ -148,7 +148,7 @@ fn dense_logdet<const FMA: bool>(ctx: &Ctx, prior: &Prior, obs: &[(Point, f64)])
 
 /// A growing factorisation: rows of `L` and `W` for the observations so far, and
 /// `Sigma = A - W^T W` (upper triangle, row-major `nv x nv`).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Factor {
     pts: Points,
     /// Packed lower-triangular rows: row `i` starts at `i (i + 1) / 2`, has `i + 1` entries.
@@ -168,17 +168,6 @@ impl Factor {
     /// Whether the factor holds no observation.
     pub fn is_empty(&self) -> bool {
         self.pts.is_empty()
-    }
-
-    /// An empty factor (for operations that do not touch one).
-    fn clone_empty(&self) -> Factor {
-        Factor {
-            pts: Points::default(),
-            l: Vec::new(),
-            inv_diag: Vec::new(),
-            w: Vec::new(),
-            sigma: Vec::new(),
-        }
     }
 
     fn truncate(&mut self, n: usize, nv: usize) {
@@ -469,11 +458,8 @@ impl UtilityEngine {
             }
         }
         let mut base = Factor {
-            pts: Points::default(),
-            l: Vec::new(),
-            inv_diag: Vec::new(),
-            w: Vec::new(),
             sigma: a.clone(),
+            ..Factor::default()
         };
         let mut scratch = Vec::new();
         let logdet_a = match dispatch(
@@ -518,16 +504,7 @@ impl UtilityEngine {
             base,
             prior: dense_prior,
         };
-        let mut base = std::mem::replace(
-            &mut engine.base,
-            Factor {
-                pts: Points::default(),
-                l: Vec::new(),
-                inv_diag: Vec::new(),
-                w: Vec::new(),
-                sigma: Vec::new(),
-            },
-        );
+        let mut base = std::mem::take(&mut engine.base);
         engine.add(&mut base, &obs)?;
         engine.base = base;
         Ok(engine)
@@ -615,7 +592,8 @@ impl UtilityEngine {
     /// `f_D` of the prior plus `obs` by one dense factorisation ([`super::dense`]): the
     /// fastest way to evaluate a whole walk from scratch.
     fn dense_utility(&self, obs: &[(Point, f64)]) -> Result<f64> {
-        let mut unused = self.base.clone_empty();
+        // The dense path builds its own matrix; the dispatcher's factor goes unused.
+        let mut unused = Factor::default();
         match dispatch(
             self.isa,
             &mut unused,

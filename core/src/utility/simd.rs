@@ -146,6 +146,17 @@ impl Points {
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
+    /// The coordinates of points `from..`, at most `len` of them (x, y, floor).
+    pub fn tail(&self, from: usize, len: usize) -> (&[f64], &[f64], &[f64]) {
+        let from = from.min(self.len());
+        let n = (self.len() - from).min(len);
+        (
+            &self.x[from..from + n],
+            &self.y[from..from + n],
+            &self.floor[from..from + n],
+        )
+    }
+
     pub fn truncate(&mut self, n: usize) {
         self.x.truncate(n);
         self.y.truncate(n);
@@ -175,13 +186,8 @@ pub fn kernel_row_from<const FMA: bool>(
     from: usize,
     out: &mut [f64],
 ) {
-    let from = from.min(q.len());
-    let n = (q.len() - from).min(out.len());
-    let (qx, qy, qf) = (
-        &q.x[from..from + n],
-        &q.y[from..from + n],
-        &q.floor[from..from + n],
-    );
+    let (qx, qy, qf) = q.tail(from, out.len());
+    let n = qx.len();
     for j in 0..n {
         let dx = p.0 - qx[j];
         let dy = p.1 - qy[j];
@@ -238,13 +244,8 @@ pub unsafe fn kernel_row_avx512(
     out: &mut [f64],
 ) {
     use std::arch::x86_64::*;
-    let from = from.min(q.len());
-    let n = (q.len() - from).min(out.len());
-    let (qx, qy, qf) = (
-        &q.x[from..from + n],
-        &q.y[from..from + n],
-        &q.floor[from..from + n],
-    );
+    let (qx, qy, qf) = q.tail(from, out.len());
+    let n = qx.len();
     /// Constants of one row, passed by reference so the helper stays small.
     #[derive(Clone, Copy)]
     struct Consts {
