@@ -22,7 +22,11 @@ module="$demo_dir/core-jvm"
 build="$module/build"
 gen="$build/generated/uniffi"
 classes="$build/kotlin-classes"
-profile="${TRAILPRINT_PROFILE:-debug}"
+# Cargo profile of the native library. `test` (the default) is the profile `cargo test`
+# builds with, so after the Rust tests the library costs one crate's compile, not a second
+# build of every dependency; `release` for the demo at full speed.
+profile="${TRAILPRINT_PROFILE:-test}"
+[[ "$profile" == debug ]] && profile=dev # cargo's name for target/debug's own profile
 
 run_tests=1
 run_demo=0
@@ -74,11 +78,13 @@ target_dir="${CARGO_TARGET_DIR:-}"
 if [[ -z "$target_dir" ]]; then
   target_dir="$(cargo metadata --format-version 1 --no-deps | python3 -c 'import json,sys; print(json.load(sys.stdin)["target_directory"])')"
 fi
-cargo_flags=(-p trailprint-bindings)
-[[ "$profile" == release ]] && cargo_flags+=(--release)
+cargo_flags=(-p trailprint-bindings --profile "$profile")
 log "cargo build ${cargo_flags[*]} (target $target_dir)"
 cargo build -q "${cargo_flags[@]}" >&2
-libdir="$target_dir/$profile"
+case "$profile" in # the output folder: dev and test share target/debug
+  dev | test) libdir="$target_dir/debug" ;;
+  *) libdir="$target_dir/$profile" ;;
+esac
 case "$(uname -s)" in
   Darwin) lib="$libdir/libtrailprint_ffi.dylib" ;;
   *) lib="$libdir/libtrailprint_ffi.so" ;;
