@@ -71,11 +71,20 @@ mod x86 {
         }
         // SAFETY (all three): the features were detected above.
         let t = best(|| unsafe { fma512(iters) });
-        println!("512-bit FMA: {:.2} GFMA/s", (iters * 12 * 8) as f64 / t / 1e9);
+        println!(
+            "512-bit FMA: {:.2} GFMA/s",
+            (iters * 12 * 8) as f64 / t / 1e9
+        );
         let t = best(|| unsafe { fma256(iters) });
-        println!("256-bit FMA: {:.2} GFMA/s", (iters * 12 * 4) as f64 / t / 1e9);
+        println!(
+            "256-bit FMA: {:.2} GFMA/s",
+            (iters * 12 * 4) as f64 / t / 1e9
+        );
         let t = best(|| unsafe { sqrt512(iters / 10) });
-        println!("512-bit sqrt: {:.2} ns per vector", t / (iters / 10 * 12) as f64 * 1e9);
+        println!(
+            "512-bit sqrt: {:.2} ns per vector",
+            t / (iters / 10 * 12) as f64 * 1e9
+        );
     }
 }
 

@@ -81,7 +81,22 @@ enum Command {
     Simulate(cmd_simulate::Args),
 }
 
+/// Ends quietly when the reader of standard output goes away (`trailprint ... | head`), as
+/// Unix tools do. Rust starts programs with SIGPIPE ignored, so a write to a closed pipe
+/// would otherwise make `println!` panic. Database writes are transactions, so being
+/// killed mid-command loses nothing already committed.
+#[cfg(unix)]
+fn die_on_closed_pipe() {
+    // SAFETY: called first thing in `main`, before any thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    #[cfg(unix)]
+    die_on_closed_pipe();
     let cli = Cli::parse();
     let db = cli.db.as_deref();
     let result = match cli.command {
