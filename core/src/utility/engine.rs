@@ -190,10 +190,10 @@ fn push_rows<const FMA: bool>(f: &mut Factor, ctx: &Ctx, p: &Point, noise: f64) 
     simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pf, &f.pts, &mut row[..n]);
     for j in 0..n {
         let oj = j * (j + 1) / 2;
-        let s = row[j] - simd::dot::<FMA>(&prev[oj..oj + j], &row[..j]);
+        let s = row[j] - simd::dot_isa::<FMA>(ctx.isa, &prev[oj..oj + j], &row[..j]);
         row[j] = s * f.inv_diag[j];
     }
-    let d2 = ctx.sf2 + ctx.sn2 + noise - simd::dot::<FMA>(&row[..n], &row[..n]);
+    let d2 = ctx.sf2 + ctx.sn2 + noise - simd::dot_isa::<FMA>(ctx.isa, &row[..n], &row[..n]);
     if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
         f.l.truncate(off);
         return false;
@@ -205,9 +205,7 @@ fn push_rows<const FMA: bool>(f: &mut Factor, ctx: &Ctx, p: &Point, noise: f64) 
     f.w.resize(woff + nv, 0.0);
     let (wprev, wrow) = f.w.split_at_mut(woff);
     simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pf, &ctx.vertices, wrow);
-    for j in 0..n {
-        simd::axpy::<FMA>(-row[j], &wprev[j * nv..(j + 1) * nv], wrow);
-    }
+    simd::gemv_sub_isa::<FMA>(ctx.isa, &row[..n], wprev, nv, wrow);
     let inv = 1.0 / diag;
     for x in wrow.iter_mut() {
         *x *= inv;

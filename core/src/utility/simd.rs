@@ -44,36 +44,172 @@ fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
 }
 
 /// `sum a[i] * b[i]` over the common length.
+///
+/// Two accumulators of eight lanes each (one zmm register apiece on AVX-512) and a plain
+/// reduction at the end: a shape LLVM turns into straight vector FMAs. (An earlier version
+/// with one sixteen-element array was vectorised as pairs of 128-bit halves shuffled
+/// together, which made the forward substitutions of `WalkState::push` twice as slow.)
 #[inline(always)]
 pub fn dot<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0f64; 16];
+    let mut acc0 = [0.0f64; 8];
+    let mut acc1 = [0.0f64; 8];
     let mut ca = a.chunks_exact(16);
     let mut cb = b.chunks_exact(16);
     for (x, y) in (&mut ca).zip(&mut cb) {
-        for i in 0..16 {
-            acc[i] = fmadd::<FMA>(x[i], y[i], acc[i]);
+        for i in 0..8 {
+            acc0[i] = fmadd::<FMA>(x[i], y[i], acc0[i]);
+        }
+        for i in 0..8 {
+            acc1[i] = fmadd::<FMA>(x[8 + i], y[8 + i], acc1[i]);
         }
     }
     let (ra, rb) = (ca.remainder(), cb.remainder());
     let mut i = 0;
-    while i + 4 <= ra.len() {
-        for k in 0..4 {
-            acc[k] = fmadd::<FMA>(ra[i + k], rb[i + k], acc[k]);
+    if ra.len() >= 8 {
+        for k in 0..8 {
+            acc0[k] = fmadd::<FMA>(ra[k], rb[k], acc0[k]);
         }
-        i += 4;
+        i = 8;
     }
     let mut tail = 0.0;
     while i < ra.len() {
         tail = fmadd::<FMA>(ra[i], rb[i], tail);
         i += 1;
     }
-    let mut s = [0.0f64; 4];
-    for k in 0..4 {
-        s[k] = (acc[k] + acc[k + 4]) + (acc[k + 8] + acc[k + 12]);
+    let mut lanes = [0.0f64; 8];
+    for k in 0..8 {
+        lanes[k] = acc0[k] + acc1[k];
     }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
+    let s4 = [
+        lanes[0] + lanes[4],
+        lanes[1] + lanes[5],
+        lanes[2] + lanes[6],
+        lanes[3] + lanes[7],
+    ];
+    (s4[0] + s4[2]) + (s4[1] + s4[3]) + tail
+}
+
+/// [`dot`] with the instruction set chosen at run time: AVX-512 intrinsics where the CPU
+/// has them (LLVM vectorises the portable loop with 128-bit registers only, and forward
+/// substitution is a long sequence of dot products), the portable loop elsewhere.
+#[inline(always)]
+pub fn dot_isa<const FMA: bool>(isa: Isa, a: &[f64], b: &[f64]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx512 {
+        // SAFETY: `Isa::Avx512` is only detected on CPUs with AVX-512F.
+        return unsafe { dot_avx512(a, b) };
+    }
+    let _ = isa;
+    dot::<FMA>(a, b)
+}
+
+/// `sum a[i] * b[i]` with AVX-512: two zmm accumulators, a masked tail.
+///
+/// # Safety
+/// The CPU must support AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
+pub unsafe fn dot_avx512(a: &[f64], b: &[f64]) -> f64 {
+    use std::arch::x86_64::*;
+    let n = a.len().min(b.len());
+    let (pa, pb) = (a.as_ptr(), b.as_ptr());
+    let mut acc0 = _mm512_setzero_pd();
+    let mut acc1 = _mm512_setzero_pd();
+    let mut i = 0;
+    // SAFETY: every load below stays within the first n elements (masked at the tail).
+    unsafe {
+        while i + 16 <= n {
+            acc0 = _mm512_fmadd_pd(_mm512_loadu_pd(pa.add(i)), _mm512_loadu_pd(pb.add(i)), acc0);
+            acc1 = _mm512_fmadd_pd(
+                _mm512_loadu_pd(pa.add(i + 8)),
+                _mm512_loadu_pd(pb.add(i + 8)),
+                acc1,
+            );
+            i += 16;
+        }
+        while i < n {
+            let m: __mmask8 = if n - i >= 8 {
+                0xff
+            } else {
+                (1u8 << (n - i)) - 1
+            };
+            acc0 = _mm512_fmadd_pd(
+                _mm512_maskz_loadu_pd(m, pa.add(i)),
+                _mm512_maskz_loadu_pd(m, pb.add(i)),
+                acc0,
+            );
+            i += 8;
+        }
+    }
+    _mm512_reduce_add_pd(_mm512_add_pd(acc0, acc1))
+}
+
+/// `y[c] -= sum_j x[j] m[j * ld + c]` for `c < y.len()`: a row-major matrix-vector
+/// product subtracted from `y` (the new row of `W` in `WalkState::push`). On AVX-512, `y`
+/// stays in registers, 32 columns at a time, while `j` runs over the matrix rows, instead
+/// of being loaded and stored once per row as a sequence of [`axpy`]s would.
+#[inline(always)]
+pub fn gemv_sub_isa<const FMA: bool>(isa: Isa, x: &[f64], m: &[f64], ld: usize, y: &mut [f64]) {
+    let w = y.len();
+    assert!(
+        x.is_empty() || (ld >= w && m.len() >= (x.len() - 1) * ld + w),
+        "gemv_sub: matrix too small"
+    );
+    #[cfg(target_arch = "x86_64")]
+    if isa == Isa::Avx512 {
+        // SAFETY: `Isa::Avx512` is only detected on CPUs with AVX-512F; sizes checked.
+        unsafe { gemv_sub_avx512(x, m, ld, y) };
+        return;
+    }
+    let _ = isa;
+    for (j, &xj) in x.iter().enumerate() {
+        axpy::<FMA>(-xj, &m[j * ld..j * ld + w], y);
+    }
+}
+
+/// The AVX-512 body of [`gemv_sub_isa`].
+///
+/// # Safety
+/// AVX-512F; `m` holds `x.len()` rows of stride `ld >= y.len()`.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
+unsafe fn gemv_sub_avx512(x: &[f64], m: &[f64], ld: usize, y: &mut [f64]) {
+    use std::arch::x86_64::*;
+    let w = y.len();
+    let mask = |c: usize| -> __mmask8 {
+        if c >= w {
+            0
+        } else if w - c >= 8 {
+            0xff
+        } else {
+            (1u8 << (w - c)) - 1
+        }
+    };
+    let (pm, py) = (m.as_ptr(), y.as_mut_ptr());
+    let mut c0 = 0;
+    while c0 < w {
+        let ks = [mask(c0), mask(c0 + 8), mask(c0 + 16), mask(c0 + 24)];
+        // SAFETY: masked loads and stores touch only columns < w of rows < x.len().
+        unsafe {
+            let mut acc: [__m512d; 4] =
+                std::array::from_fn(|k| _mm512_maskz_loadu_pd(ks[k], py.add(c0 + 8 * k)));
+            for (j, &xj) in x.iter().enumerate() {
+                let r = _mm512_set1_pd(xj);
+                let row = pm.add(j * ld + c0);
+                for (k, a) in acc.iter_mut().enumerate() {
+                    *a = _mm512_fnmadd_pd(r, _mm512_maskz_loadu_pd(ks[k], row.add(8 * k)), *a);
+                }
+            }
+            for (k, a) in acc.iter().enumerate() {
+                _mm512_mask_storeu_pd(py.add(c0 + 8 * k), ks[k], *a);
+            }
+        }
+        c0 += 32;
+    }
 }
 
 /// `y[i] += alpha * x[i]` over the common length.
@@ -418,6 +554,46 @@ mod tests {
         }
         assert!(worst < 1e-15, "worst relative error {worst}");
         assert_eq!(exp_nonpos::<false>(0.0), 1.0);
+    }
+
+    #[test]
+    fn dot_isa_matches_naive_sums_for_every_length() {
+        for n in 0..70 {
+            let a: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos()).collect();
+            let naive: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            for isa in [Isa::Generic, Isa::detect()] {
+                assert!(
+                    (dot_isa::<false>(isa, &a, &b) - naive).abs() < 1e-12,
+                    "{isa:?} n={n}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn gemv_sub_matches_axpys_for_awkward_widths() {
+        for w in [0usize, 1, 7, 8, 9, 31, 32, 33, 61, 70] {
+            for rows in [0usize, 1, 5, 40] {
+                let ld = w + 3;
+                let m: Vec<f64> = (0..rows * ld).map(|i| (i as f64 * 0.13).sin()).collect();
+                let x: Vec<f64> = (0..rows).map(|i| (i as f64 * 0.7).cos()).collect();
+                let y0: Vec<f64> = (0..w).map(|i| i as f64 * 0.25).collect();
+                let want: Vec<f64> = (0..w)
+                    .map(|c| y0[c] - (0..rows).map(|j| x[j] * m[j * ld + c]).sum::<f64>())
+                    .collect();
+                for isa in [Isa::Generic, Isa::detect()] {
+                    let mut y = y0.clone();
+                    gemv_sub_isa::<false>(isa, &x, &m, ld, &mut y);
+                    for c in 0..w {
+                        assert!(
+                            (y[c] - want[c]).abs() < 1e-12,
+                            "{isa:?} w={w} rows={rows} c={c}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
