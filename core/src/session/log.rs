@@ -8,29 +8,17 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use serde::{Deserialize, Serialize};
 
 use crate::building::Building;
-use crate::gp::Kernel;
+use crate::store::PlanRecord;
 use crate::{Error, Result};
 
-/// A saved plan, as the session reads and writes it.
+/// A saved plan as a session reads and writes it: the store's plan record (request, walk
+/// and figures) and the building it belongs to.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlanData {
     /// Store id of the building.
     pub building_id: i64,
-    pub start: String,
-    pub end: String,
-    pub budget_m: f64,
-    /// The surveyor model the plan was made for (the planner's JSON).
-    pub surveyor: serde_json::Value,
-    pub kernel: Kernel,
-    pub algorithm: String,
-    pub seed: Option<u64>,
-    /// Vertex ids from `start` to `end`.
-    pub walk: Vec<String>,
-    pub length_m: f64,
-    pub samples: u64,
-    pub utility_nats: f64,
-    pub elapsed_ms: u64,
-    pub created_ms: i64,
+    #[serde(flatten)]
+    pub record: PlanRecord,
 }
 
 /// The session row: which plan it started from and its settings (surveyor and options, as

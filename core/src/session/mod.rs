@@ -62,6 +62,7 @@ use crate::building::Building;
 use crate::gp::predict::GpModel;
 use crate::gp::{Kernel, Point};
 use crate::samples::sample_walk;
+use crate::store::PlanRecord;
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
@@ -93,19 +94,21 @@ impl PlanData {
     ) -> Self {
         PlanData {
             building_id,
-            start: walk.first().map(|s| s.to_string()).unwrap_or_default(),
-            end: walk.last().map(|s| s.to_string()).unwrap_or_default(),
-            budget_m,
-            surveyor: serde_json::Value::Null,
-            kernel,
-            algorithm: "given".into(),
-            seed: None,
-            walk: walk.iter().map(|s| s.to_string()).collect(),
-            length_m,
-            samples: 0,
-            utility_nats: 0.0,
-            elapsed_ms: 0,
-            created_ms: 0,
+            record: PlanRecord {
+                start: walk.first().map(|s| s.to_string()).unwrap_or_default(),
+                end: walk.last().map(|s| s.to_string()).unwrap_or_default(),
+                budget_m,
+                surveyor: serde_json::Value::Null,
+                kernel,
+                algorithm: "given".into(),
+                seed: None,
+                walk: walk.iter().map(|s| s.to_string()).collect(),
+                length_m,
+                samples: 0,
+                utility_nats: 0.0,
+                elapsed_ms: 0,
+                created_ms: 0,
+            },
         }
     }
 }
@@ -161,7 +164,7 @@ impl Session {
             surveyor,
             options,
             s.kernel,
-            plan.budget_m,
+            plan.record.budget_m,
             s.tracker.route().to_vec(),
         )?;
         Ok(s)
@@ -200,8 +203,8 @@ impl Session {
         settings: SessionSettings,
     ) -> Result<Session> {
         let building = log.building(plan.building_id)?;
-        let walk = building.resolve_walk(&plan.walk)?;
-        let kernel = plan.kernel;
+        let walk = building.resolve_walk(&plan.record.walk)?;
+        let kernel = plan.record.kernel;
         let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor.model())?;
         let planned_utility = engine.utility(&walk)?;
         let tracker = Tracker::new(
@@ -210,7 +213,7 @@ impl Session {
             settings.surveyor,
             settings.options,
             kernel,
-            plan.budget_m,
+            plan.record.budget_m,
             walk,
         )?;
         Ok(Session {
@@ -250,7 +253,7 @@ impl Session {
         let ev = match &entry.event {
             LogEvent::Replan { plan_id } => {
                 let plan = self.log.load_plan(*plan_id)?;
-                let walk = b.resolve_walk(&plan.walk).map_err(bad)?;
+                let walk = b.resolve_walk(&plan.record.walk).map_err(bad)?;
                 return self.tracker.apply_replan(&b, &walk, entry.seq).map_err(bad);
             }
             LogEvent::Step { steps, .. } => Event::Step {
@@ -403,19 +406,21 @@ impl Session {
         let ids = b.walk_ids(&walk);
         let plan = PlanData {
             building_id: self.building_id,
-            start: ids[0].clone(),
-            end: b.vertices[end].id.clone(),
-            budget_m: budget,
-            surveyor: serde_json::to_value(model).unwrap_or(serde_json::Value::Null),
-            kernel: self.kernel,
-            algorithm: self.replanner.name(),
-            seed: Some(seed),
-            walk: ids.clone(),
-            length_m: length,
-            samples,
-            utility_nats: utility,
-            elapsed_ms: started.elapsed().as_millis() as u64,
-            created_ms: now_ms(),
+            record: PlanRecord {
+                start: ids[0].clone(),
+                end: b.vertices[end].id.clone(),
+                budget_m: budget,
+                surveyor: serde_json::to_value(model).unwrap_or(serde_json::Value::Null),
+                kernel: self.kernel,
+                algorithm: self.replanner.name(),
+                seed: Some(seed),
+                walk: ids.clone(),
+                length_m: length,
+                samples,
+                utility_nats: utility,
+                elapsed_ms: started.elapsed().as_millis() as u64,
+                created_ms: now_ms(),
+            },
         };
         let plan_id = self.log.save_plan(&plan)?;
         let t = self.tracker.last_t_ms().unwrap_or_else(now_ms);

@@ -11,7 +11,7 @@ use rusqlite::OptionalExtension;
 
 use super::log::{LogEntry, LogEvent, PlanData, SessionLog, SessionRow};
 use crate::building::Building;
-use crate::store::{BuildingRef, CollectedFingerprint, PlanRecord, SessionEvent, Store};
+use crate::store::{BuildingRef, CollectedFingerprint, SessionEvent, Store};
 use crate::{Error, Result};
 
 fn to_store(event: &LogEvent) -> SessionEvent {
@@ -75,42 +75,14 @@ impl SessionLog for Store {
 
     fn load_plan(&self, plan_id: i64) -> Result<PlanData> {
         let p = Store::load_plan(self, plan_id)?;
-        let r = p.record;
         Ok(PlanData {
             building_id: p.building_id,
-            start: r.start,
-            end: r.end,
-            budget_m: r.budget_m,
-            surveyor: r.surveyor,
-            kernel: r.kernel,
-            algorithm: r.algorithm,
-            seed: r.seed,
-            walk: r.walk,
-            length_m: r.length_m,
-            samples: r.samples,
-            utility_nats: r.utility_nats,
-            elapsed_ms: r.elapsed_ms,
-            created_ms: r.created_ms,
+            record: p.record,
         })
     }
 
     fn save_plan(&self, plan: &PlanData) -> Result<i64> {
-        let record = PlanRecord {
-            start: plan.start.clone(),
-            end: plan.end.clone(),
-            budget_m: plan.budget_m,
-            surveyor: plan.surveyor.clone(),
-            kernel: plan.kernel,
-            algorithm: plan.algorithm.clone(),
-            seed: plan.seed,
-            walk: plan.walk.clone(),
-            length_m: plan.length_m,
-            samples: plan.samples,
-            utility_nats: plan.utility_nats,
-            elapsed_ms: plan.elapsed_ms,
-            created_ms: plan.created_ms,
-        };
-        Store::save_plan(self, BuildingRef::Id(plan.building_id), &record)
+        Store::save_plan(self, BuildingRef::Id(plan.building_id), &plan.record)
     }
 
     fn create_session(
