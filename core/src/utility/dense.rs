@@ -23,8 +23,9 @@
 //! vector loads and eight broadcasts feed sixteen FMAs, so the loop runs at the FMA
 //! port's rate rather than at the cache's. The triangular solve of the tile against the
 //! block's own `8 x 8` diagonal factor is done in the same registers before the single
-//! store. Measured on area-two (`examples/engine_timing.rs`), this is about 80% of the
-//! machine's FMA peak; see `docs/decisions/0002-dense-micro-kernel.md`.
+//! store. Measured on area-two (`examples/engine_timing.rs` against `examples/fma_peak.rs`)
+//! the factorisation runs at about 90% of the core's FMA peak; see
+//! `docs/decisions/0002-dense-micro-kernel.md`.
 //!
 //! # Storage
 //! Row-major, leading dimension [`Layout::ld`], only the upper triangle meaningful. The
