@@ -8,11 +8,13 @@ use trailprint::gp::Kernel;
 use trailprint::plan::{Algorithm, PlanRequest, Problem};
 use trailprint::samples::SurveyorModel;
 
+/// One of the paper-shaped instances, from the repository's copies in `core/tests/fixtures`
+/// (byte for byte the files of `shared/instances/`), so a checkout anywhere can run them.
 pub fn instance(name: &str) -> Arc<Building> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/instances")
+        .join("tests/fixtures")
         .join(name);
-    Arc::new(Building::load(&path).expect("shared instance"))
+    Arc::new(Building::load(&path).expect("instance fixture"))
 }
 
 /// A `w x h` grid with `step` m edges, minus the edges in `drop` (by index in row-major

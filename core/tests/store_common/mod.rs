@@ -11,13 +11,10 @@ use rusqlite::types::ValueRef;
 /// The `trailprint` binary built for these tests.
 pub const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
 
-/// A shared instance (`shared/instances/NAME`).
+/// A shared instance, from the repository's copy in `core/tests/fixtures` (byte for byte
+/// `shared/instances/NAME`), so a checkout anywhere can run the tests.
 pub fn shared_instance(name: &str) -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/instances"
-    ))
-    .join(name)
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures")).join(name)
 }
 
 /// The store fixtures directory (`core/tests/fixtures/store`).
