@@ -107,7 +107,8 @@ fn reference(
         session,
         "fresh database and fresh log both start at 1"
     );
-    let world = World::for_building(&building, &plan.record.kernel, settings.options.seed).expect("world");
+    let world =
+        World::for_building(&building, &plan.record.kernel, settings.options.seed).expect("world");
     let opts = SimOptions {
         deviate: 0.25,
         seed: settings.options.seed,

@@ -215,3 +215,62 @@ fn observations_api_agrees_with_walks() {
     assert!(rel(e2.prior_utility().expect("u"), a) < 1e-12);
     let _ = Point::new(0.0, 0.0, 0);
 }
+
+/// Two 4 x 3 floors of 2 m lattices joined by a 6 m stair between `a0_0` and `b0_0`, with
+/// pilot points on both floors: exercises the zero covariance across floors in every
+/// evaluator (the dense path's masked kernel rows among them).
+fn two_floors() -> Arc<Building> {
+    let mut vertices = Vec::new();
+    let mut edges = Vec::new();
+    for (f, name) in [(0, "a"), (1, "b")] {
+        for x in 0..4 {
+            for y in 0..3 {
+                vertices.push(serde_json::json!({"id": format!("{name}{x}_{y}"), "x": x as f64 * 2.0, "y": y as f64 * 2.0, "floor": f}));
+                if x + 1 < 4 {
+                    edges.push(serde_json::json!({"a": format!("{name}{x}_{y}"), "b": format!("{name}{}_{y}", x + 1)}));
+                }
+                if y + 1 < 3 {
+                    edges.push(serde_json::json!({"a": format!("{name}{x}_{y}"), "b": format!("{name}{x}_{}", y + 1)}));
+                }
+            }
+        }
+    }
+    edges.push(serde_json::json!({"a": "a0_0", "b": "b0_0", "length": 6.0}));
+    let pilot: Vec<_> = [(0.0, 0.0, 0), (5.0, 3.0, 0), (2.0, 4.0, 1), (6.0, 1.0, 1)]
+        .iter()
+        .map(|&(x, y, f)| serde_json::json!({"x": x, "y": y, "floor": f, "rss": {"ap": -60.0}}))
+        .collect();
+    let doc = serde_json::json!({"format": "survey-building/1", "name": "two floors",
+        "floors": [{"id": 0}, {"id": 1}], "vertices": vertices, "edges": edges, "pilot": pilot});
+    Arc::new(Building::from_json(&doc.to_string(), "two floors").expect("two floors"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+
+    /// On a building with two floors the whole-walk (dense) path, the incremental path and
+    /// the reference agree, for robot and human surveyors.
+    #[test]
+    fn every_evaluator_agrees_across_floors(
+        choices in proptest::collection::vec(0usize..5, 1..40),
+        human in any::<bool>(),
+        sf2 in 5.0f64..200.0, ell in 1.0f64..40.0, sn2 in 1.0f64..10.0,
+    ) {
+        let b = two_floors();
+        let k = Kernel::new(sf2, ell, sn2);
+        let model = if human { SurveyorModel::human() } else { SurveyorModel::Robot { interval: 0.5 } };
+        // Start at the stair foot so that many walks change floor.
+        let start = b.vertex_index("a0_0").expect("a0_0");
+        let walk = random_walk(&b, start, &choices);
+        let e = UtilityEngine::new(b.clone(), k, model).expect("engine");
+        let mut st = e.start(walk[0]).expect("start");
+        for &v in &walk[1..] {
+            st.push(v).expect("push");
+        }
+        let inc = st.utility().expect("incremental");
+        let dense = e.utility(&walk).expect("dense");
+        let refv = reference(&b, &k, &model, &walk);
+        prop_assert!(rel(dense, refv) < 1e-9, "dense {dense} vs reference {refv}");
+        prop_assert!(rel(inc, dense) < 1e-12, "incremental {inc} vs dense {dense}");
+    }
+}
