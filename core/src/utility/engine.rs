@@ -66,6 +66,12 @@ struct Prior {
     a: Vec<f64>,
 }
 
+/// Largest dense matrix (in doubles) a thread keeps between evaluations: 32 MiB, about
+/// 2,000 rows. Bigger problems (buildings of thousands of vertices) allocate per
+/// evaluation, where the allocation is small beside the factorisation, so that a phone
+/// does not hold that much memory per planning thread once planning is over.
+const DENSE_KEEP_MAX: usize = 4 << 20;
+
 thread_local! {
     /// The dense path's matrix, kept per thread: allocating (and page-faulting) a fresh
     /// megabyte per evaluation would cost a sizeable share of the evaluation itself.
@@ -142,7 +148,9 @@ fn dense_logdet<const FMA: bool>(ctx: &Ctx, prior: &Prior, obs: &[(Point, f64)])
         }
     }
     let out = dense::factor(ctx.isa, &mut a, layout, nd + nr);
-    DENSE.set(a);
+    if a.capacity() <= DENSE_KEEP_MAX {
+        DENSE.set(a);
+    }
     out
 }
 
