@@ -70,9 +70,12 @@ pub fn count_simple(p: &Problem, cap: u64) -> u64 {
     count
 }
 
-/// Cost-model units of work per second of time limit (calibrated so that the default
-/// 2 s suffice on a loaded two-core machine: the engine does about 1.6e9 per second
-/// per thread).
+/// Cost-model units of work per second of time limit, calibrated so that the default 2 s
+/// suffice on a loaded two-core machine with the first engine (about 1.6e9 units per
+/// second per thread). The dense whole-walk path (decision 0002) does about 1.5e10 on an
+/// idle core, so `auto` now finishes well inside its limit here, and a phone several
+/// times slower still does: the walk stays the same on both, which a larger figure would
+/// not guarantee.
 pub const UNITS_PER_SECOND: f64 = 2.5e9;
 
 /// The `auto` solver.
