@@ -193,19 +193,25 @@ unsafe fn gemv_sub_avx512(x: &[f64], m: &[f64], ld: usize, y: &mut [f64]) {
     let mut c0 = 0;
     while c0 < w {
         let ks = [mask(c0), mask(c0 + 8), mask(c0 + 16), mask(c0 + 24)];
-        // SAFETY: masked loads and stores touch only columns < w of rows < x.len().
+        // SAFETY: masked loads and stores touch only columns < w of rows < x.len(). The
+        // pointers of fully masked-off vectors may lie past the end of `m` or `y`, so they
+        // are formed with `wrapping_add` (never dereferenced), not `add`.
         unsafe {
             let mut acc: [__m512d; 4] =
-                std::array::from_fn(|k| _mm512_maskz_loadu_pd(ks[k], py.add(c0 + 8 * k)));
+                std::array::from_fn(|k| _mm512_maskz_loadu_pd(ks[k], py.wrapping_add(c0 + 8 * k)));
             for (j, &xj) in x.iter().enumerate() {
                 let r = _mm512_set1_pd(xj);
-                let row = pm.add(j * ld + c0);
+                let row = pm.wrapping_add(j * ld + c0);
                 for (k, a) in acc.iter_mut().enumerate() {
-                    *a = _mm512_fnmadd_pd(r, _mm512_maskz_loadu_pd(ks[k], row.add(8 * k)), *a);
+                    *a = _mm512_fnmadd_pd(
+                        r,
+                        _mm512_maskz_loadu_pd(ks[k], row.wrapping_add(8 * k)),
+                        *a,
+                    );
                 }
             }
             for (k, a) in acc.iter().enumerate() {
-                _mm512_mask_storeu_pd(py.add(c0 + 8 * k), ks[k], *a);
+                _mm512_mask_storeu_pd(py.wrapping_add(c0 + 8 * k), ks[k], *a);
             }
         }
         c0 += 32;
