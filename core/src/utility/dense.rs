@@ -85,7 +85,7 @@ pub fn factor(isa: Isa, a: &mut [f64], layout: Layout, logdet_from: usize) -> Op
         // SAFETY: as above, for AVX2 and FMA.
         Isa::Avx2Fma => unsafe { factor_avx2(a, layout, logdet_from) },
         // SAFETY: bounds checked above.
-        _ => unsafe { factor_with::<Portable<false>>(a, layout, logdet_from) },
+        _ => unsafe { factor_with::<Plain<false>>(a, layout, logdet_from) },
     }
 }
 
@@ -93,42 +93,23 @@ pub fn factor(isa: Isa, a: &mut [f64], layout: Layout, logdet_from: usize) -> Op
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
 unsafe fn factor_avx512(a: &mut [f64], layout: Layout, logdet_from: usize) -> Option<f64> {
     // SAFETY: forwarded from `factor`.
-    unsafe { factor_with::<x86::Avx512>(a, layout, logdet_from) }
+    unsafe { factor_with::<std::arch::x86_64::__m512d>(a, layout, logdet_from) }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn factor_avx2(a: &mut [f64], layout: Layout, logdet_from: usize) -> Option<f64> {
     // SAFETY: forwarded from `factor`.
-    unsafe { factor_with::<Portable<true>>(a, layout, logdet_from) }
-}
-
-/// The tile operations a factorisation is built from.
-trait Tiles {
-    /// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by all rows above
-    /// `k0`: `C[r][c] -= sum_{p<k0} U[p][k0+r] U[p][c]`. With `solve`, then solves
-    /// `U_kk^T X = C` with the block's diagonal factor (`solve` holds `1 / U_rr`). Rows
-    /// `r < mr` are stored.
-    ///
-    /// # Safety
-    /// `a` points to a buffer of the layout `ld` with at least `k0 + 8` rows and
-    /// `j0 + 8 * NV <= ld`.
-    unsafe fn tile<const NV: usize>(
-        a: *mut f64,
-        ld: usize,
-        k0: usize,
-        j0: usize,
-        mr: usize,
-        solve: Option<&[f64; MR]>,
-    );
+    unsafe { factor_with::<Plain<true>>(a, layout, logdet_from) }
 }
 
 /// The driver shared by every instruction set.
 ///
 /// # Safety
-/// `a` holds at least `layout.len()` elements (checked by [`factor`]).
+/// `a` holds at least `layout.len()` elements (checked by [`factor`]), and `L`'s
+/// instruction set is available.
 #[inline(always)]
-unsafe fn factor_with<T: Tiles>(a: &mut [f64], layout: Layout, logdet_from: usize) -> Option<f64> {
+unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, logdet_from: usize) -> Option<f64> {
     let Layout { n, ld } = layout;
     let ptr = a.as_mut_ptr();
     let mut logdet = 0.0;
@@ -136,7 +117,7 @@ unsafe fn factor_with<T: Tiles>(a: &mut [f64], layout: Layout, logdet_from: usiz
     while k0 < n {
         let mr = MR.min(n - k0);
         // SAFETY: k0 + 8 <= n + 8 rows exist; k0 + 8 <= n + 8 <= ld columns.
-        unsafe { T::tile::<1>(ptr, ld, k0, k0, mr, None) };
+        unsafe { tile::<L, 1>(ptr, ld, k0, k0, mr, None) };
         // The tile also wrote the strict lower triangle of the diagonal block; keep it
         // zero so that no stale value lingers in the buffer between factorisations.
         for r in 1..mr {
@@ -173,11 +154,18 @@ unsafe fn factor_with<T: Tiles>(a: &mut [f64], layout: Layout, logdet_from: usiz
         while j0 < n {
             if j0 + 8 >= n {
                 // SAFETY: j0 + 8 <= n + 8 <= ld.
-                unsafe { T::tile::<1>(ptr, ld, k0, j0, mr, Some(&inv)) };
+                unsafe { tile::<L, 1>(ptr, ld, k0, j0, mr, Some(&inv)) };
                 j0 += 8;
             } else {
                 // SAFETY: j0 + 16 <= n + 16 <= ld.
-                unsafe { T::tile::<2>(ptr, ld, k0, j0, mr, Some(&inv)) };
+                unsafe {
+                    if L::PAIRS {
+                        tile::<L, 2>(ptr, ld, k0, j0, mr, Some(&inv));
+                    } else {
+                        tile::<L, 1>(ptr, ld, k0, j0, mr, Some(&inv));
+                        tile::<L, 1>(ptr, ld, k0, j0 + 8, mr, Some(&inv));
+                    }
+                }
                 j0 += 16;
             }
         }
@@ -186,157 +174,173 @@ unsafe fn factor_with<T: Tiles>(a: &mut [f64], layout: Layout, logdet_from: usiz
     Some(logdet)
 }
 
-/// Plain-Rust tiles that LLVM vectorises for whatever target it compiles for (AVX2, NEON
-/// on Android phones, SSE2). `FMA` selects fused multiply-adds (only under a
-/// `target_feature` that has them).
-struct Portable<const FMA: bool>;
+/// Eight doubles side by side: one zmm register on AVX-512, a plain array elsewhere (which
+/// LLVM vectorises for AVX2, NEON on phones, or SSE2). The tile below is written once over
+/// this trait.
+///
+/// # Safety
+/// Every method is `unsafe`: the AVX-512 implementation needs the CPU feature, and `load`
+/// and `store` take raw pointers to eight valid doubles.
+trait Lanes: Copy {
+    /// Whether a tile of two vectors per row (16 columns) keeps its accumulators in
+    /// registers; if not, the driver updates 16 columns as two tiles of 8.
+    const PAIRS: bool;
+    unsafe fn load(p: *const f64) -> Self;
+    unsafe fn store(self, p: *mut f64);
+    unsafe fn splat(x: f64) -> Self;
+    /// `c - a * b`, fused where the target has it.
+    unsafe fn fnmadd(a: Self, b: Self, c: Self) -> Self;
+    unsafe fn mul(self, b: Self) -> Self;
+}
 
-impl<const FMA: bool> Tiles for Portable<FMA> {
+/// Portable lanes; `FMA` selects fused multiply-adds (only under a `target_feature` that
+/// has them, where `mul_add` is one instruction rather than a library call).
+#[derive(Clone, Copy)]
+struct Plain<const FMA: bool>([f64; 8]);
+
+impl<const FMA: bool> Lanes for Plain<FMA> {
+    // 2 x 8 x 8 accumulators would not fit in NEON's or AVX2's registers.
+    const PAIRS: bool = false;
+
     #[inline(always)]
-    unsafe fn tile<const NV: usize>(
-        a: *mut f64,
-        ld: usize,
-        k0: usize,
-        j0: usize,
-        mr: usize,
-        solve: Option<&[f64; MR]>,
-    ) {
-        // Column chunks of 8 keep the accumulators at 64 doubles.
-        for v in 0..NV {
-            let jc = j0 + 8 * v;
-            let mut acc = [[0.0f64; 8]; MR];
-            for (r, accr) in acc.iter_mut().enumerate() {
-                for (c, x) in accr.iter_mut().enumerate() {
-                    // SAFETY: row k0 + r < n + 8, column jc + c < ld (caller).
-                    *x = unsafe { *a.add((k0 + r) * ld + jc + c) };
-                }
-            }
-            for p in 0..k0 {
-                // SAFETY: row p < k0, columns within ld (caller).
-                let row = unsafe { a.add(p * ld) };
-                let mut b = [0.0f64; 8];
-                for (c, x) in b.iter_mut().enumerate() {
-                    // SAFETY: as above.
-                    *x = unsafe { *row.add(jc + c) };
-                }
-                for (r, accr) in acc.iter_mut().enumerate() {
-                    // SAFETY: column k0 + r < n + 8 <= ld.
-                    let s = unsafe { *row.add(k0 + r) };
-                    for c in 0..8 {
-                        accr[c] = if FMA {
-                            (-s).mul_add(b[c], accr[c])
-                        } else {
-                            accr[c] - s * b[c]
-                        };
-                    }
-                }
-            }
-            if let Some(inv) = solve {
-                for r in 0..MR {
-                    for q in 0..r {
-                        // SAFETY: row k0 + q, column k0 + r, both within the buffer.
-                        let u = unsafe { *a.add((k0 + q) * ld + k0 + r) };
-                        let (done, rest) = acc.split_at_mut(r);
-                        for c in 0..8 {
-                            rest[0][c] = if FMA {
-                                (-u).mul_add(done[q][c], rest[0][c])
-                            } else {
-                                rest[0][c] - u * done[q][c]
-                            };
-                        }
-                    }
-                    for x in &mut acc[r] {
-                        *x *= inv[r];
-                    }
-                }
-            }
-            for (r, accr) in acc.iter().enumerate().take(mr) {
-                for (c, x) in accr.iter().enumerate() {
-                    // SAFETY: as for the loads.
-                    unsafe { *a.add((k0 + r) * ld + jc + c) = *x };
-                }
-            }
+    unsafe fn load(p: *const f64) -> Self {
+        // SAFETY: the caller passes eight valid doubles.
+        Plain(std::array::from_fn(|c| unsafe { *p.add(c) }))
+    }
+
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f64) {
+        for (c, x) in self.0.into_iter().enumerate() {
+            // SAFETY: as for `load`.
+            unsafe { *p.add(c) = x };
         }
+    }
+
+    #[inline(always)]
+    unsafe fn splat(x: f64) -> Self {
+        Plain([x; 8])
+    }
+
+    #[inline(always)]
+    unsafe fn fnmadd(a: Self, b: Self, c: Self) -> Self {
+        Plain(std::array::from_fn(|i| {
+            if FMA {
+                (-a.0[i]).mul_add(b.0[i], c.0[i])
+            } else {
+                c.0[i] - a.0[i] * b.0[i]
+            }
+        }))
+    }
+
+    #[inline(always)]
+    unsafe fn mul(self, b: Self) -> Self {
+        Plain(std::array::from_fn(|i| self.0[i] * b.0[i]))
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{MR, Tiles};
+    use super::Lanes;
     use std::arch::x86_64::*;
 
-    /// AVX-512 tiles: the `8 x 8*NV` tile lives in `8*NV` zmm registers.
-    pub struct Avx512;
+    // Each method carries the target features so that its intrinsic inlines into it,
+    // and it into the AVX-512 driver (`factor_avx512`), which has the same features.
+    impl Lanes for __m512d {
+        const PAIRS: bool = true;
 
-    impl Tiles for Avx512 {
-        #[inline(always)]
-        unsafe fn tile<const NV: usize>(
-            a: *mut f64,
-            ld: usize,
-            k0: usize,
-            j0: usize,
-            mr: usize,
-            solve: Option<&[f64; MR]>,
-        ) {
-            // SAFETY: forwarded (the caller runs under the same target features).
-            unsafe { tile_avx512::<NV>(a, ld, k0, j0, mr, solve) }
+        #[inline]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn load(p: *const f64) -> Self {
+            // SAFETY: the caller passes eight valid doubles.
+            unsafe { _mm512_loadu_pd(p) }
+        }
+
+        #[inline]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn store(self, p: *mut f64) {
+            // SAFETY: as for `load`.
+            unsafe { _mm512_storeu_pd(p, self) }
+        }
+
+        #[inline]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn splat(x: f64) -> Self {
+            _mm512_set1_pd(x)
+        }
+
+        #[inline]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn fnmadd(a: Self, b: Self, c: Self) -> Self {
+            _mm512_fnmadd_pd(a, b, c)
+        }
+
+        #[inline]
+        #[target_feature(enable = "avx512f")]
+        unsafe fn mul(self, b: Self) -> Self {
+            _mm512_mul_pd(self, b)
         }
     }
+}
 
-    /// The AVX-512 tile. A free function with `target_feature` so that the intrinsics
-    /// inline into it (and it into the AVX-512 driver).
-    // Index loops over the register arrays read as the algebra does (acc[r] -= u acc[q]).
-    #[allow(clippy::needless_range_loop)]
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
-    unsafe fn tile_avx512<const NV: usize>(
-        a: *mut f64,
-        ld: usize,
-        k0: usize,
-        j0: usize,
-        mr: usize,
-        solve: Option<&[f64; MR]>,
-    ) {
-        // SAFETY: every pointer below stays in rows < k0 + 8 and columns < j0 + 8 NV
-        // or < k0 + 8, all within the buffer (caller's contract).
-        unsafe {
-            let mut acc = [[_mm512_setzero_pd(); NV]; MR];
+/// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by all rows above `k0`,
+/// `C[r][c] -= sum_{p<k0} U[p][k0+r] U[p][c]`, with the tile held in `8 * NV` lanes
+/// vectors; with `solve` (which holds `1 / U_rr`), then solves `U_kk^T X = C` against the
+/// block's diagonal factor in the same vectors. Rows `r < mr` are stored.
+///
+/// # Safety
+/// `a` points to a buffer of leading dimension `ld` with at least `k0 + 8` rows and
+/// `j0 + 8 * NV <= ld`, and `L`'s instruction set is available.
+// Index loops over the register arrays read as the algebra does (acc[r] -= u acc[q]).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+unsafe fn tile<L: Lanes, const NV: usize>(
+    a: *mut f64,
+    ld: usize,
+    k0: usize,
+    j0: usize,
+    mr: usize,
+    solve: Option<&[f64; MR]>,
+) {
+    // SAFETY: every pointer below stays in rows < k0 + 8 and columns < j0 + 8 NV or
+    // < k0 + 8, all within the buffer (caller's contract).
+    unsafe {
+        let zero = L::splat(0.0);
+        let mut acc = [[zero; NV]; MR];
+        for (r, accr) in acc.iter_mut().enumerate() {
+            for (v, x) in accr.iter_mut().enumerate() {
+                *x = L::load(a.add((k0 + r) * ld + j0 + 8 * v));
+            }
+        }
+        for p in 0..k0 {
+            let row = a.add(p * ld);
+            let mut b = [zero; NV];
+            for (v, x) in b.iter_mut().enumerate() {
+                *x = L::load(row.add(j0 + 8 * v));
+            }
             for (r, accr) in acc.iter_mut().enumerate() {
-                for (v, x) in accr.iter_mut().enumerate() {
-                    *x = _mm512_loadu_pd(a.add((k0 + r) * ld + j0 + 8 * v));
+                let s = L::splat(*row.add(k0 + r));
+                for v in 0..NV {
+                    accr[v] = L::fnmadd(s, b[v], accr[v]);
                 }
             }
-            for p in 0..k0 {
-                let row = a.add(p * ld);
-                let mut b = [_mm512_setzero_pd(); NV];
-                for (v, x) in b.iter_mut().enumerate() {
-                    *x = _mm512_loadu_pd(row.add(j0 + 8 * v));
-                }
-                for (r, accr) in acc.iter_mut().enumerate() {
-                    let s = _mm512_set1_pd(*row.add(k0 + r));
+        }
+        if let Some(inv) = solve {
+            for r in 0..MR {
+                for q in 0..r {
+                    let u = L::splat(*a.add((k0 + q) * ld + k0 + r));
                     for v in 0..NV {
-                        accr[v] = _mm512_fnmadd_pd(s, b[v], accr[v]);
+                        acc[r][v] = L::fnmadd(u, acc[q][v], acc[r][v]);
                     }
+                }
+                let s = L::splat(inv[r]);
+                for v in 0..NV {
+                    acc[r][v] = acc[r][v].mul(s);
                 }
             }
-            if let Some(inv) = solve {
-                for r in 0..MR {
-                    for q in 0..r {
-                        let u = _mm512_set1_pd(*a.add((k0 + q) * ld + k0 + r));
-                        for v in 0..NV {
-                            acc[r][v] = _mm512_fnmadd_pd(u, acc[q][v], acc[r][v]);
-                        }
-                    }
-                    let s = _mm512_set1_pd(inv[r]);
-                    for v in 0..NV {
-                        acc[r][v] = _mm512_mul_pd(acc[r][v], s);
-                    }
-                }
-            }
-            for (r, accr) in acc.iter().enumerate().take(mr) {
-                for (v, x) in accr.iter().enumerate() {
-                    _mm512_storeu_pd(a.add((k0 + r) * ld + j0 + 8 * v), *x);
-                }
+        }
+        for (r, accr) in acc.iter().enumerate().take(mr) {
+            for (v, x) in accr.iter().enumerate() {
+                x.store(a.add((k0 + r) * ld + j0 + 8 * v));
             }
         }
     }
