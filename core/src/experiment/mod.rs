@@ -352,6 +352,7 @@ pub fn run_experiment(
                             seed: ps,
                             time_limit: config.time_limit_for(algorithm),
                             params: config.params,
+                            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
                         };
                         let r = plan(building.clone(), &req, control)?;
                         let n = r.samples;
@@ -507,11 +508,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 }
 
 fn termination_name(t: Termination) -> &'static str {
-    match t {
-        Termination::Completed => "completed",
-        Termination::Optimal => "optimal",
-        Termination::TimeLimit => "time_limit",
-    }
+    t.name()
 }
 
 /// The files [`Experiment::write`] writes, in order.

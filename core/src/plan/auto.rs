@@ -1,4 +1,5 @@
-//! `auto`, the default planner: a portfolio whose stages each start from the best walk
+//! `auto`, the default planner. On buildings of more than [`LARGE_VERTICES`] vertices it
+//! runs the large-building search of [`super::scale`]; on smaller ones, a portfolio whose stages each start from the best walk
 //! so far, sized by a deterministic work budget and capped by the time limit (2 s by
 //! default).
 //!
@@ -78,6 +79,12 @@ pub fn count_simple(p: &Problem, cap: u64) -> u64 {
 /// not guarantee.
 pub const UNITS_PER_SECOND: f64 = 2.5e9;
 
+/// Buildings with more vertices than this take the large-building search of
+/// [`super::scale`] (spread constructions, then a large-neighbourhood search on a
+/// surrogate); smaller ones the staged portfolio above, which proves the paper's Area One
+/// optimal.
+pub const LARGE_VERTICES: usize = 100;
+
 /// The `auto` solver.
 #[derive(Debug, Clone)]
 pub struct Auto {
@@ -137,6 +144,9 @@ impl Solver for Auto {
     }
 
     fn solve(&self, p: &Problem, run: &Run) -> Result<Outcome> {
+        if p.building.len() > LARGE_VERTICES {
+            return super::scale::plan_large(p, run, self.seed).map(|(o, _)| o);
+        }
         // From the configured limit, not the time left, so that the work is deterministic.
         let secs = run.time_limit().map_or(2.0, |d| d.as_secs_f64());
         // Evaluations the work budget allows.

@@ -96,6 +96,7 @@ pub fn run_bench(
                         seed,
                         time_limit: cfg.limit(alg),
                         params: cfg.params,
+                        memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
                     };
                     let r = plan(case.building.clone(), &req, control)?;
                     let row = BenchRow {

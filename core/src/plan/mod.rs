@@ -11,15 +11,17 @@
 //! * The **run state** ([`Run`]) carries the caller's [`Control`] (cancel token, progress
 //!   observer), the deadline from the time limit and the seeded random generator is
 //!   created by each solver from [`PlanRequest::seed`] (`ChaCha8Rng::seed_from_u64`).
-//! * **Termination** is an enum ([`Termination`]): completed, proved optimal, time limit.
-//!   Cancellation is not a termination but the error [`Error::Cancelled`]: a cancelled
-//!   plan returns no walk.
+//! * **Termination** is an enum ([`Termination`]): completed, proved optimal, time limit,
+//!   cancelled. Solvers [`offer`](Run::offer) their best walk as they go, so a plan that
+//!   is cancelled (or a solver that runs out of time deep inside a step) returns the best
+//!   walk so far, `termination: cancelled`, never nothing.
 //!
 //! Every returned walk follows real edges, starts at `v_s`, ends at `v_t` and satisfies
 //! `C(P) <= B + 1e-9`; [`plan`] checks this before returning.
 
 pub mod auto;
 pub mod bench;
+pub mod coverage;
 pub mod ero;
 pub mod exact;
 pub mod genetic;
@@ -27,6 +29,7 @@ pub mod greedy;
 pub mod local_search;
 pub mod metric;
 pub mod recursive_greedy;
+pub mod scale;
 pub mod steiner;
 
 use std::sync::Arc;
@@ -64,11 +67,15 @@ pub enum Algorithm {
     Ero,
     /// Branch and bound; proves optimality when it finishes.
     Exact,
+    /// The systematic walk without any utility: nearest unwalked edge first (the
+    /// baseline a surveyor without Trailprint achieves, see [`coverage`]).
+    Coverage,
 }
 
 impl Algorithm {
     /// All algorithms, in the order the benchmark lists them.
-    pub const ALL: [Algorithm; 6] = [
+    pub const ALL: [Algorithm; 7] = [
+        Algorithm::Coverage,
         Algorithm::Greedy,
         Algorithm::Genetic,
         Algorithm::RecursiveGreedy,
@@ -86,6 +93,7 @@ impl Algorithm {
             Algorithm::RecursiveGreedy => "recursive-greedy",
             Algorithm::Ero => "ero",
             Algorithm::Exact => "exact",
+            Algorithm::Coverage => "coverage",
         }
     }
 
@@ -96,7 +104,7 @@ impl Algorithm {
             .find(|a| a.name() == s)
             .ok_or_else(|| {
                 Error::InvalidRequest(format!(
-                    "unknown algorithm {s:?}, expected one of auto, greedy, genetic, recursive-greedy, ero, exact"
+                    "unknown algorithm {s:?}, expected one of auto, greedy, genetic, recursive-greedy, ero, exact, coverage"
                 ))
             })
     }
@@ -200,7 +208,30 @@ pub struct PlanRequest {
     pub time_limit: Option<Duration>,
     #[serde(default)]
     pub params: Params,
+    /// Most memory the plan may use, bytes (default [`DEFAULT_MEMORY_BUDGET`]): a request
+    /// whose working set would exceed it is refused before anything is allocated
+    /// ([`Error::InvalidRequest`] naming the size and what to change).
+    #[serde(default = "default_memory_budget")]
+    pub memory_budget: u64,
 }
+
+/// Largest genetic population a request may ask for (the paper uses 100 and 200).
+pub const MAX_POPULATION: usize = 10_000;
+
+/// Most genetic generations a request may ask for (the paper uses 5).
+pub const MAX_GENERATIONS: usize = 10_000;
+
+/// Default memory budget of a plan: 512 MiB, what a mid-range phone lets an app use.
+pub const DEFAULT_MEMORY_BUDGET: u64 = 512 << 20;
+
+fn default_memory_budget() -> u64 {
+    DEFAULT_MEMORY_BUDGET
+}
+
+/// A budget may be at most this many times the building's total edge length (plus the
+/// shortest way from the start to the end): a longer walk only repeats edges it has
+/// walked, and the planners size populations and tables from the budget.
+pub const MAX_BUDGET_FACTOR: f64 = 4.0;
 
 impl PlanRequest {
     /// A request with default algorithm (`auto`), robot model, seed 0 and default parameters.
@@ -215,6 +246,7 @@ impl PlanRequest {
             seed: 0,
             time_limit: None,
             params: Params::default(),
+            memory_budget: DEFAULT_MEMORY_BUDGET,
         }
     }
 
@@ -235,6 +267,20 @@ pub enum Termination {
     Optimal,
     /// The time limit was reached; the walk is the best found so far.
     TimeLimit,
+    /// The caller cancelled; the walk is the best found so far.
+    Cancelled,
+}
+
+impl Termination {
+    /// The name used in JSON and CSV (`completed`, `optimal`, `time_limit`, `cancelled`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Termination::Completed => "completed",
+            Termination::Optimal => "optimal",
+            Termination::TimeLimit => "time_limit",
+            Termination::Cancelled => "cancelled",
+        }
+    }
 }
 
 /// The outcome of a plan, in the JSON shape of SPEC section 7 (plus `optimal`, `nodes`
@@ -272,6 +318,8 @@ pub struct Progress {
     pub fraction: f64,
     /// Utility of the best walk so far, nats, if there is one.
     pub best_utility: Option<f64>,
+    /// Length of the best walk so far, metres, if there is one.
+    pub best_length: Option<f64>,
     /// A short human-readable note (`generation 3/5`, `1234 nodes`).
     pub message: String,
 }
@@ -341,23 +389,69 @@ impl Control {
     }
 }
 
-/// The run state shared by a solver's threads: control, start time and deadline.
+/// The best walk a run has found so far: what a cancelled or timed-out plan returns.
+#[derive(Debug, Clone, Default)]
+struct Incumbent {
+    walk: Vec<usize>,
+    utility: f64,
+}
+
+/// The run state shared by a solver's threads: control, start time, deadline and the
+/// best walk so far (solvers [`offer`](Run::offer) theirs as they go).
 #[derive(Debug, Clone)]
 pub struct Run {
     control: Control,
     started: Instant,
     deadline: Option<Instant>,
+    best: Arc<std::sync::Mutex<Option<Incumbent>>>,
+    /// Length of the best walk so far, for progress reports (f64 bits; NaN: none).
+    best_length: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl Run {
     /// Starts the clock now.
     pub fn new(control: Control, time_limit: Option<Duration>) -> Self {
-        let started = Instant::now();
+        Self::starting_at(control, time_limit, Instant::now())
+    }
+
+    /// Starts the clock at `started` (when the request arrived, so that set-up counts
+    /// against the time limit).
+    pub fn starting_at(control: Control, time_limit: Option<Duration>, started: Instant) -> Self {
         Run {
             control,
             started,
             deadline: time_limit.map(|t| started + t),
+            best: Arc::default(),
+            best_length: Arc::new(std::sync::atomic::AtomicU64::new(f64::NAN.to_bits())),
         }
+    }
+
+    /// Offers a feasible walk (start to end, within budget) with its exact utility; the
+    /// run keeps the best offered (ties: see [`better`]) and returns it if the plan is
+    /// cancelled or runs out of time before the solver returns.
+    pub fn offer(&self, walk: &[usize], utility: f64, length: f64) {
+        let Ok(mut g) = self.best.lock() else {
+            return;
+        };
+        let replace = match &*g {
+            None => true,
+            Some(b) => better((walk, utility), (&b.walk, b.utility)),
+        };
+        if replace && utility.is_finite() {
+            *g = Some(Incumbent {
+                walk: walk.to_vec(),
+                utility,
+            });
+            self.best_length.store(length.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    /// The best walk offered so far and its utility.
+    pub fn incumbent(&self) -> Option<(Vec<usize>, f64)> {
+        self.best
+            .lock()
+            .ok()
+            .and_then(|g| g.as_ref().map(|b| (b.walk.clone(), b.utility)))
     }
 
     /// The same control with an earlier deadline (for a phase of `auto`).
@@ -370,6 +464,8 @@ impl Run {
             control: self.control.clone(),
             started: self.started,
             deadline,
+            best: self.best.clone(),
+            best_length: self.best_length.clone(),
         }
     }
 
@@ -380,6 +476,11 @@ impl Run {
         } else {
             Ok(())
         }
+    }
+
+    /// Whether the caller cancelled.
+    pub fn control_cancelled(&self) -> bool {
+        self.control.is_cancelled()
     }
 
     /// Whether the deadline has passed.
@@ -423,10 +524,12 @@ impl Run {
     /// Sends a progress report to the observer, if any.
     pub fn report(&self, algorithm: Algorithm, fraction: f64, best: Option<f64>, msg: String) {
         if let Some(o) = &self.control.observer {
+            let len = f64::from_bits(self.best_length.load(Ordering::Relaxed));
             o.progress(&Progress {
                 algorithm,
                 fraction: fraction.clamp(0.0, 1.0),
                 best_utility: best,
+                best_length: (best.is_some() && len.is_finite()).then_some(len),
                 message: msg,
             });
         }
@@ -490,6 +593,15 @@ impl Problem {
     /// `f_D(P)`.
     pub fn utility(&self, walk: &[usize]) -> Result<f64> {
         self.engine.utility(walk)
+    }
+
+    /// Offers a feasible walk to the run as its best so far (see [`Run::offer`]);
+    /// infeasible walks are ignored.
+    pub fn offer(&self, run: &Run, walk: &[usize], utility: f64) {
+        let len = self.length(walk);
+        if walk.first() == Some(&self.start) && walk.last() == Some(&self.end) && self.fits(len) {
+            run.offer(walk, utility, len);
+        }
     }
 
     /// `f_D` of many walks in parallel.
@@ -575,6 +687,7 @@ pub fn solver_for(
         Algorithm::Ero => Box::new(ero::Ero::new(params.iterations, seed)),
         Algorithm::Exact => Box::new(exact::Exact::new()),
         Algorithm::Auto => Box::new(auto::Auto::new(*params, seed)),
+        Algorithm::Coverage => Box::new(coverage::Coverage),
     }
 }
 
@@ -598,6 +711,22 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
             req.budget
         )));
     }
+    let total = building.total_edge_length();
+    if req.budget > MAX_BUDGET_FACTOR * total + BUDGET_EPS {
+        return Err(Error::InvalidRequest(format!(
+            "budget {} m is more than {MAX_BUDGET_FACTOR} times the {total:.1} m of edges of \
+             {:?}: a walk that long only repeats what it has walked; ask for at most {:.1} m \
+             (a budget of {total:.1} m or more lets a planner walk every edge)",
+            req.budget,
+            building.name,
+            MAX_BUDGET_FACTOR * total
+        )));
+    }
+    if req.memory_budget == 0 {
+        return Err(Error::InvalidRequest(
+            "memory budget must be a positive number of bytes".into(),
+        ));
+    }
     req.kernel.validate("kernel")?;
     req.model.validate()?;
     let p = &req.params;
@@ -618,6 +747,18 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
         return bad(format!(
             "mutation must be a probability in [0, 1], got {}",
             p.mutation
+        ));
+    }
+    if p.population > MAX_POPULATION {
+        return bad(format!(
+            "population must be at most {MAX_POPULATION}, got {}",
+            p.population
+        ));
+    }
+    if p.generations > MAX_GENERATIONS {
+        return bad(format!(
+            "generations must be at most {MAX_GENERATIONS}, got {}",
+            p.generations
         ));
     }
     if p.depth > 5 {
@@ -659,8 +800,11 @@ pub fn plan_with_prior(
     prior: &[crate::utility::Observation],
     control: &Control,
 ) -> Result<PlanResult> {
+    // The clock starts now: set-up (shortest paths, the engine) counts against the limit.
+    let started = Instant::now();
     let (start, end) = validate(&building, req)?;
-    let run = Run::new(control.clone(), req.effective_time_limit());
+    check_memory(&building, req, prior.len())?;
+    let run = Run::starting_at(control.clone(), req.effective_time_limit(), started);
     let metric = Arc::new(Metric::new(&building));
     let shortest = metric.dist(start, end);
     if !shortest.is_finite() || shortest > req.budget + BUDGET_EPS {
@@ -681,9 +825,77 @@ pub fn plan_with_prior(
         budget: req.budget,
     };
     let solver = solver_for(req.algorithm, req.seed, &req.params);
-    let out = solver.solve(&problem, &run)?;
-    run.check()?;
+    let out = match solver.solve(&problem, &run) {
+        Ok(mut out) => {
+            if run.control.is_cancelled() {
+                out.termination = Termination::Cancelled;
+            }
+            out
+        }
+        Err(Error::Cancelled) => best_so_far(&problem, &run, Termination::Cancelled)?,
+        Err(e) => return Err(e),
+    };
     finish(&problem, req, out, &run)
+}
+
+/// The run's best offered walk, else the shortest walk from the start to the end (the
+/// answer of a plan stopped before any solver offered one).
+fn best_so_far(problem: &Problem, run: &Run, termination: Termination) -> Result<Outcome> {
+    if let Some((walk, utility)) = run.incumbent() {
+        return Ok(Outcome::new(walk, utility, termination));
+    }
+    let walk = problem.shortest_walk();
+    let utility = problem.utility(&walk)?;
+    Ok(Outcome::new(walk, utility, termination))
+}
+
+/// Estimated peak working set of planning `req` on `building` with `prior` extra
+/// observations, in bytes: the shortest-path table (12 bytes per vertex pair), the engine's
+/// vertex covariance and its factor (two `|V| x |V|` matrices), the pilot rows, and per
+/// planning thread one dense matrix of `[pilot + prior, samples of a full-budget walk,
+/// vertices]` plus the incremental rows of such a walk.
+pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> u64 {
+    let nv = building.len() as f64;
+    let nd = (building.pilot.len() + prior) as f64;
+    let budget = if req.budget.is_finite() { req.budget } else { 0.0 };
+    let ns = budget / req.model.spacing().max(1e-3) + 2.0;
+    let metric = 12.0 * nv * nv;
+    let engine = 8.0 * (2.0 * nv * nv + nd * nd + 2.0 * nd * nv);
+    let n = nd + ns + nv + 16.0;
+    let threads = rayon::current_num_threads().max(1) as f64;
+    // The large-building search (auto and coverage beyond `auto::LARGE_VERTICES`) only
+    // evaluates whole walks; the other planners also grow walks incrementally (rows of
+    // `L` and `W` per sample).
+    let whole_walks = matches!(req.algorithm, Algorithm::Auto | Algorithm::Coverage)
+        && building.len() > auto::LARGE_VERTICES;
+    let incremental = if whole_walks { 0.0 } else { 2.0 * ns * (nd + ns + nv) };
+    let per_thread = 8.0 * (n * n + incremental);
+    // A fixed allowance for the process, the building and the search's own tables.
+    let fixed = 16.0 * 1024.0 * 1024.0;
+    (metric + engine + threads * per_thread + fixed).min(u64::MAX as f64) as u64
+}
+
+/// Refuses a request whose estimated working set exceeds its memory budget.
+fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<()> {
+    let need = estimate_memory(building, req, prior);
+    if need <= req.memory_budget {
+        return Ok(());
+    }
+    let mib = |b: u64| b.div_ceil(1 << 20);
+    Err(Error::InvalidRequest(format!(
+        "planning on {:?} ({} vertices, budget {} m) needs about {} MiB, more than the memory \
+         budget of {} MiB: the vertex covariance and the shortest-path table grow with the \
+         square of the vertex count and a walk's matrix with its samples; plan one floor or \
+         part of the building, use a shorter budget or a sparser sample interval, or raise \
+         the memory budget (--memory-budget MIB, PlanRequest.memory_budget) if the device has \
+         {} MiB to spare",
+        building.name,
+        building.len(),
+        req.budget,
+        mib(need),
+        mib(req.memory_budget),
+        mib(need)
+    )))
 }
 
 /// Checks an outcome and dresses it as a result.

@@ -255,6 +255,7 @@ impl Replanner for PlannerReplanner {
             seed: r.seed,
             time_limit: self.time_limit,
             params: self.params,
+            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
         };
         let res =
             crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;

@@ -113,11 +113,26 @@ unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, logdet_from: usiz
     let Layout { n, ld } = layout;
     let ptr = a.as_mut_ptr();
     let mut logdet = 0.0;
+    // Large matrices (beyond the caches) go panel by panel: the rows of a panel of
+    // `PANEL` rows are first updated by every row above the panel, in depth chunks of `KC`
+    // rows and column strips of `STRIP` columns, so that each chunk-strip block is read
+    // from the L2 cache by all the panel's block rows in turn; the single pass below then
+    // only has the depth inside the panel left. Smaller matrices keep the single pass
+    // (bit for bit the results of decision 0002).
+    let blocked = n > CHUNK_FROM;
     let mut k0 = 0;
     while k0 < n {
         let mr = MR.min(n - k0);
+        let panel0 = if blocked { k0 - k0 % PANEL } else { 0 };
+        if blocked && k0 == panel0 && panel0 > 0 {
+            // SAFETY: rows below panel0 + PANEL <= n + PANEL - 1 may run past n by less
+            // than PANEL rows: only the first `n + 8` rows exist, so block rows are
+            // limited to those starting below n.
+            unsafe { update_panel::<L>(ptr, ld, n, panel0) };
+        }
+        let p0 = panel0;
         // SAFETY: k0 + 8 <= n + 8 rows exist; k0 + 8 <= n + 8 <= ld columns.
-        unsafe { tile::<L, 1>(ptr, ld, k0, k0, mr, None) };
+        unsafe { tile::<L, 1>(ptr, ld, k0, k0, mr, None, p0, k0) };
         // The tile also wrote the strict lower triangle of the diagonal block; keep it
         // zero so that no stale value lingers in the buffer between factorisations.
         for r in 1..mr {
@@ -150,28 +165,107 @@ unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, logdet_from: usiz
                 a[row + cc] *= inv[r];
             }
         }
-        let mut j0 = k0 + MR;
-        while j0 < n {
-            if j0 + 8 >= n {
-                // SAFETY: j0 + 8 <= n + 8 <= ld.
-                unsafe { tile::<L, 1>(ptr, ld, k0, j0, mr, Some(&inv)) };
-                j0 += 8;
-            } else {
-                // SAFETY: j0 + 16 <= n + 16 <= ld.
-                unsafe {
-                    if L::PAIRS {
-                        tile::<L, 2>(ptr, ld, k0, j0, mr, Some(&inv));
-                    } else {
-                        tile::<L, 1>(ptr, ld, k0, j0, mr, Some(&inv));
-                        tile::<L, 1>(ptr, ld, k0, j0 + 8, mr, Some(&inv));
-                    }
-                }
-                j0 += 16;
-            }
-        }
+        // SAFETY: as for the diagonal tile.
+        unsafe { sweep::<L>(ptr, ld, n, k0, mr, Some(&inv), p0, k0) };
         k0 += MR;
     }
     Some(logdet)
+}
+
+/// Matrices of more rows than this are factorised in depth chunks of [`KC`] rows (the
+/// joint matrix then no longer fits in the L2 cache: 1,024 rows are 8 MiB). Smaller ones
+/// keep the single pass, so their results are bit for bit those of decision 0002.
+const CHUNK_FROM: usize = 1024;
+
+/// Depth chunk of large factorisations, rows.
+const KC: usize = 256;
+
+/// Rows per panel of large factorisations (eight block rows).
+const PANEL: usize = 64;
+
+/// Column strip of the panel update: a `KC x STRIP` block is 512 KiB.
+const STRIP: usize = 256;
+
+/// Updates the rows `panel0..panel0 + PANEL` (those below `n`), columns from each block
+/// row's diagonal to the end, by all rows above `panel0`: `C -= U[..panel0, rows]^T
+/// U[..panel0, cols]`. Tiles that straddle a block row's diagonal also update a few
+/// entries below it, which nothing reads.
+///
+/// # Safety
+/// As for [`tile`]: the buffer has `n + 8` rows of `ld >= n + 16` columns, `panel0 < n`.
+#[inline(always)]
+unsafe fn update_panel<L: Lanes>(ptr: *mut f64, ld: usize, n: usize, panel0: usize) {
+    let end = (panel0 + PANEL).min(n);
+    let mut p0 = 0;
+    while p0 < panel0 {
+        let p1 = (p0 + KC).min(panel0);
+        let mut s0 = panel0;
+        while s0 < n {
+            let s1 = (s0 + STRIP).min(n);
+            let mut k = panel0;
+            while k < end {
+                let mr = MR.min(n - k);
+                // Tiles of this strip at or right of the block's diagonal, 16 wide from
+                // the strip's start (8 wide for a last column of 8 or fewer).
+                let mut j0 = s0;
+                while j0 < s1 {
+                    let w = if L::PAIRS && j0 + 8 < s1 { 16 } else { 8 };
+                    if j0 + w > k {
+                        // SAFETY: j0 + 16 <= n + 16 <= ld; rows k..k + 8 <= n + 8.
+                        unsafe {
+                            if w == 16 {
+                                tile::<L, 2>(ptr, ld, k, j0, mr, None, p0, p1);
+                            } else {
+                                tile::<L, 1>(ptr, ld, k, j0, mr, None, p0, p1);
+                            }
+                        }
+                    }
+                    j0 += w;
+                }
+                k += MR;
+            }
+            s0 = s1;
+        }
+        p0 = p1;
+    }
+}
+
+/// Updates the tiles of block row `k0` right of its diagonal block by rows `p0..p1` (and
+/// with `solve`, solves them against the diagonal factor).
+///
+/// # Safety
+/// As for [`tile`], for every `j0` from `k0 + 8` below `n`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+unsafe fn sweep<L: Lanes>(
+    ptr: *mut f64,
+    ld: usize,
+    n: usize,
+    k0: usize,
+    mr: usize,
+    solve: Option<&[f64; MR]>,
+    p0: usize,
+    p1: usize,
+) {
+    let mut j0 = k0 + MR;
+    while j0 < n {
+        if j0 + 8 >= n {
+            // SAFETY: j0 + 8 <= n + 8 <= ld.
+            unsafe { tile::<L, 1>(ptr, ld, k0, j0, mr, solve, p0, p1) };
+            j0 += 8;
+        } else {
+            // SAFETY: j0 + 16 <= n + 16 <= ld.
+            unsafe {
+                if L::PAIRS {
+                    tile::<L, 2>(ptr, ld, k0, j0, mr, solve, p0, p1);
+                } else {
+                    tile::<L, 1>(ptr, ld, k0, j0, mr, solve, p0, p1);
+                    tile::<L, 1>(ptr, ld, k0, j0 + 8, mr, solve, p0, p1);
+                }
+            }
+            j0 += 16;
+        }
+    }
 }
 
 /// Eight doubles side by side: one zmm register on AVX-512, a plain array elsewhere (which
@@ -282,8 +376,8 @@ mod x86 {
     }
 }
 
-/// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by all rows above `k0`,
-/// `C[r][c] -= sum_{p<k0} U[p][k0+r] U[p][c]`, with the tile held in `8 * NV` lanes
+/// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by rows `p0..p1` above
+/// `k0`, `C[r][c] -= sum_{p0<=p<p1} U[p][k0+r] U[p][c]`, with the tile held in `8 * NV` lanes
 /// vectors; with `solve` (which holds `1 / U_rr`), then solves `U_kk^T X = C` against the
 /// block's diagonal factor in the same vectors. Rows `r < mr` are stored.
 ///
@@ -291,7 +385,7 @@ mod x86 {
 /// `a` points to a buffer of leading dimension `ld` with at least `k0 + 8` rows and
 /// `j0 + 8 * NV <= ld`, and `L`'s instruction set is available.
 // Index loops over the register arrays read as the algebra does (acc[r] -= u acc[q]).
-#[allow(clippy::needless_range_loop)]
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 #[inline(always)]
 unsafe fn tile<L: Lanes, const NV: usize>(
     a: *mut f64,
@@ -300,6 +394,8 @@ unsafe fn tile<L: Lanes, const NV: usize>(
     j0: usize,
     mr: usize,
     solve: Option<&[f64; MR]>,
+    p0: usize,
+    p1: usize,
 ) {
     // SAFETY: every pointer below stays in rows < k0 + 8 and columns < j0 + 8 NV or
     // < k0 + 8, all within the buffer (caller's contract).
@@ -311,7 +407,7 @@ unsafe fn tile<L: Lanes, const NV: usize>(
                 *x = L::load(a.add((k0 + r) * ld + j0 + 8 * v));
             }
         }
-        for p in 0..k0 {
+        for p in p0..p1 {
             let row = a.add(p * ld);
             let mut b = [zero; NV];
             for (v, x) in b.iter_mut().enumerate() {
@@ -377,8 +473,15 @@ mod tests {
     }
 
     fn check(isa: Isa) {
-        for n in [1usize, 2, 7, 8, 9, 15, 16, 17, 23, 24, 25, 40, 71] {
-            for from in [0, n / 3, n.saturating_sub(5), n - 1] {
+        // 1,300 rows: beyond CHUNK_FROM, so the depth-chunked pass (several chunks and a
+        // ragged last one) is checked too.
+        for n in [1usize, 2, 7, 8, 9, 15, 16, 17, 23, 24, 25, 40, 71, 1300] {
+            let froms = if n > 100 {
+                vec![n / 3]
+            } else {
+                vec![0, n / 3, n.saturating_sub(5), n - 1]
+            };
+            for from in froms {
                 let (mut a, m, layout) = spd(n);
                 let got = factor(isa, &mut a, layout, from).expect("pd");
                 let want = schur_logdet(&m, from);

@@ -422,6 +422,8 @@ pub struct UtilityEngine {
     logdet_a: f64,
     base: Factor,
     prior: Prior,
+    /// The observations beyond the pilot data the engine is conditioned on.
+    prior_obs: Vec<Observation>,
 }
 
 impl UtilityEngine {
@@ -438,11 +440,41 @@ impl UtilityEngine {
         model: SurveyorModel,
         prior: &[Observation],
     ) -> Result<Self> {
+        let all: Vec<usize> = (0..building.len()).collect();
+        Self::build(building, kernel, model, prior, &all)
+    }
+
+    /// An engine whose `V` is the subset `vertices` of the building's vertices (indices):
+    /// the search surrogate of [`crate::plan::scale`], which judges walks by what they
+    /// tell about a coarser set of vertices. Its utilities are *not* SPEC 3's `f_D`
+    /// (that needs every vertex); walks are still sampled on the whole building.
+    pub fn with_vertex_subset(
+        building: Arc<Building>,
+        kernel: Kernel,
+        model: SurveyorModel,
+        prior: &[Observation],
+        vertices: &[usize],
+    ) -> Result<Self> {
+        if let Some(&v) = vertices.iter().find(|&&v| v >= building.len()) {
+            return Err(Error::InvalidRequest(format!(
+                "vertex index {v} out of range"
+            )));
+        }
+        Self::build(building, kernel, model, prior, vertices)
+    }
+
+    fn build(
+        building: Arc<Building>,
+        kernel: Kernel,
+        model: SurveyorModel,
+        prior: &[Observation],
+        subset: &[usize],
+    ) -> Result<Self> {
         kernel.validate("kernel")?;
         model.validate()?;
         let mut vertices = Points::default();
-        for v in &building.vertices {
-            vertices.push(&v.pos);
+        for &v in subset {
+            vertices.push(&building.vertices[v].pos);
         }
         let nv = vertices.len();
         let isa = Isa::detect();
@@ -455,7 +487,7 @@ impl UtilityEngine {
             isa,
         };
         // A = K_VV + sn2 I (the upper triangle is what the kernels read).
-        let vpts = building.vertex_points();
+        let vpts: Vec<Point> = subset.iter().map(|&v| building.vertices[v].pos).collect();
         let mut a = vec![0.0; nv * nv];
         for i in 0..nv {
             for j in i..nv {
@@ -509,6 +541,7 @@ impl UtilityEngine {
             logdet_a,
             base,
             prior: dense_prior,
+            prior_obs: prior.to_vec(),
         };
         let mut base = std::mem::take(&mut engine.base);
         engine.add(&mut base, &obs)?;
@@ -552,6 +585,17 @@ impl UtilityEngine {
     /// The surveyor model.
     pub fn model(&self) -> &SurveyorModel {
         &self.model
+    }
+
+    /// The observations beyond the pilot data this engine is conditioned on.
+    pub fn prior_observations(&self) -> &[Observation] {
+        &self.prior_obs
+    }
+
+    /// Number of vertices of `V` (all the building's, or the subset of
+    /// [`with_vertex_subset`](Self::with_vertex_subset)).
+    pub fn vertex_count(&self) -> usize {
+        self.ctx.nv
     }
 
     /// The instruction set the numeric kernels run on.

@@ -15,7 +15,8 @@ pub struct Args {
     building: BuildingOpts,
     #[command(flatten)]
     route: RouteOpts,
-    /// auto, greedy, genetic, recursive-greedy, ero or exact.
+    /// auto, greedy, genetic, recursive-greedy, ero, exact or coverage (the systematic
+    /// walk: nearest unwalked edge first).
     #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Genetic: population size.
@@ -49,6 +50,13 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
+    /// Most memory the plan may use, MiB; a larger request is refused with the size it
+    /// needs.
+    #[arg(long, value_name = "MIB", default_value_t = 512)]
+    memory_budget: u64,
+    /// Show progress on stderr even when it is not a terminal (one line every 0.5 s).
+    #[arg(long)]
+    progress: bool,
     /// Print the result as one JSON object.
     #[arg(long)]
     json: bool,
@@ -77,11 +85,15 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             budget_step: a.budget_step,
             iterations: a.iterations,
         },
+        memory_budget: a.memory_budget.saturating_mul(1 << 20),
     };
     // A new walk should go where the data is thinnest: condition on everything already
     // collected in this building (nothing for a building read from a file).
     let prior = crate::store_cli::collected_prior(&a.building.building, db, &kernel)?;
-    let r = plan_with_prior(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
+    let live = crate::progress::Live::start(a.progress);
+    let r = plan_with_prior(b.clone(), &req, &prior, &live.control);
+    live.finish();
+    let r = r?;
     // A building from the database keeps its plans there; a file has nowhere to keep them.
     let plan_id = if crate::store_cli::is_file_spec(&a.building.building) {
         None
@@ -119,7 +131,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         println!("samples       {}", r.samples);
         println!("utility       {:.6} nats", r.utility_nats);
         println!("elapsed       {} ms", r.elapsed_ms);
-        println!("termination   {:?}", r.termination);
+        println!("termination   {}", r.termination.name());
         if let Some(o) = r.optimal {
             println!("optimal       {o}");
         }

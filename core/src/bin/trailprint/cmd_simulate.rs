@@ -282,6 +282,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         seed: a.seed,
         time_limit,
         params: Params::default(),
+        memory_budget: trailprint::plan::DEFAULT_MEMORY_BUDGET,
     };
     let planned = plan(b.clone(), &req, &Control::new())?;
     let plan_id = store.save_plan(

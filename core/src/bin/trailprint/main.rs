@@ -27,6 +27,7 @@ mod cmd_simulate;
 mod cmd_team_plan;
 mod cmd_utility;
 mod opts;
+mod progress;
 mod store_cli;
 
 #[derive(Parser)]

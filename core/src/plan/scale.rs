@@ -1,0 +1,382 @@
+//! Planning at building scale: what `auto` does on buildings of hundreds of vertices and
+//! budgets of hundreds of metres, where an exact evaluation of one walk costs tens of
+//! milliseconds and a search cannot afford many.
+//!
+//! # The surrogate ([`Surrogate`])
+//! A search judges candidate walks by a cheaper stand-in for `f_D` with two
+//! approximations (decision record `docs/decisions/0003-search-surrogate.md` has the
+//! measured error and speed):
+//! * **Pseudo-samples.** Consecutive samples of a walk closer together than a fraction
+//!   of the kernel length (`ell / 6`, at most 4 m) tell nearly the same thing. Each run
+//!   of `k` of them on one floor becomes one observation at their mean position with the
+//!   noise of their mean, `(sum of (sn2 + x_i)) / k^2`. A 500 m robot walk (1,000
+//!   samples at 0.5 m) becomes about 125 observations when `ell` is 40 m.
+//! * **A coarser vertex set.** `V` is replaced by one vertex per grid cell (per floor),
+//!   the cell doubling from `ell / 4` until at most [`SURROGATE_VERTICES`] remain.
+//! The utility that `auto` reports, saves and compares is always the exact `f_D` of
+//! SPEC 3: the surrogate only ranks candidates inside the search.
+//!
+//! # The search ([`plan_large`])
+//! 1. **Constructions.** Spread coverage walks ([`super::coverage::leg`]) for a few
+//!    novelty radii, each using the whole budget; the best by the surrogate is evaluated
+//!    exactly and offered at once, so a cancelled or timed-out plan returns a walk that
+//!    already uses the budget well.
+//! 2. **Large-neighbourhood search.** Destroy a random stretch of the current walk (5% to
+//!    35% of its length) and rebuild it with a randomised spread leg that counts the rest
+//!    of the walk as walked; candidates are drawn with the seeded generator and evaluated
+//!    in parallel in batches; the best of a batch replaces the current walk when its
+//!    surrogate value is higher. For the human model the score subtracts a small penalty
+//!    per reversal (walking straight back at a vertex that is not a dead end).
+//! 3. **Exact comparison.** The search stops early enough to leave time for the exact
+//!    evaluation of the final candidates (the search's best, the best construction and
+//!    the plain `coverage` walk); the best by exact `f_D` is returned, so `auto` never
+//!    returns less than the systematic walk it is judged against.
+
+use std::time::{Duration, Instant};
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::coverage::{Leg, leg, reversals};
+use super::{Algorithm, Outcome, Problem, Run, Termination, better};
+use crate::Result;
+use crate::samples::{SurveyorModel, sample_walk};
+use crate::utility::{Observation, UtilityEngine};
+
+/// Most vertices the surrogate keeps.
+pub const SURROGATE_VERTICES: usize = 240;
+
+/// Candidates per batch of the large-neighbourhood search (evaluated in parallel).
+const BATCH: usize = 8;
+
+/// The search surrogate: an engine on a coarser vertex set, fed pseudo-samples.
+#[derive(Debug, Clone)]
+pub struct Surrogate {
+    engine: UtilityEngine,
+    /// Samples merged into one pseudo-sample.
+    bin: usize,
+    sn2: f64,
+}
+
+impl Surrogate {
+    /// The surrogate of `p`'s engine (same kernel, model and prior observations).
+    pub fn new(p: &Problem) -> Result<Self> {
+        let b = &p.building;
+        let k = *p.engine.kernel();
+        let subset = coarse_vertices(p, SURROGATE_VERTICES);
+        let engine = UtilityEngine::with_vertex_subset(
+            b.clone(),
+            k,
+            *p.engine.model(),
+            p.engine.prior_observations(),
+            &subset,
+        )?;
+        let spacing = p.engine.model().spacing();
+        let span = (k.ell / 6.0).min(4.0).max(spacing);
+        let bin = ((span / spacing).floor() as usize).max(1);
+        Ok(Surrogate {
+            engine,
+            bin,
+            sn2: k.sn2,
+        })
+    }
+
+    /// Samples merged into one pseudo-sample.
+    pub fn bin(&self) -> usize {
+        self.bin
+    }
+
+    /// Number of vertices the surrogate judges by.
+    pub fn vertices(&self) -> usize {
+        self.engine.vertex_count()
+    }
+
+    /// The surrogate value of a walk (nats, comparable only with other surrogate values).
+    pub fn value(&self, walk: &[usize]) -> Result<f64> {
+        let b = self.engine.building();
+        let samples = sample_walk(b, walk, self.engine.model(), self.engine.kernel())?;
+        let mut obs: Vec<Observation> = Vec::with_capacity(samples.len() / self.bin + 2);
+        let mut i = 0;
+        while i < samples.len() {
+            let floor = samples[i].pos.floor;
+            let mut j = i;
+            let (mut x, mut y, mut var) = (0.0, 0.0, 0.0);
+            while j < samples.len() && j - i < self.bin && samples[j].pos.floor == floor {
+                x += samples[j].pos.x;
+                y += samples[j].pos.y;
+                var += self.sn2 + samples[j].extra_noise;
+                j += 1;
+            }
+            let k = (j - i) as f64;
+            let mut pos = samples[i].pos;
+            pos.x = x / k;
+            pos.y = y / k;
+            obs.push(Observation {
+                pos,
+                extra_noise: var / (k * k) - self.sn2,
+            });
+            i = j;
+        }
+        self.engine.utility_of_observations(&obs)
+    }
+}
+
+/// One vertex per grid cell and floor (the one nearest the cell's centre), the cell
+/// doubling from `ell / 4` (at least 0.5 m) until at most `cap` vertices remain. All
+/// vertices when there are at most `cap`.
+pub fn coarse_vertices(p: &Problem, cap: usize) -> Vec<usize> {
+    let b = &p.building;
+    if b.len() <= cap {
+        return (0..b.len()).collect();
+    }
+    let mut cell = (p.engine.kernel().ell / 4.0).max(0.5);
+    loop {
+        let mut best: std::collections::BTreeMap<(i64, i64, i64), (f64, usize)> =
+            std::collections::BTreeMap::new();
+        for (i, v) in b.vertices.iter().enumerate() {
+            let (cx, cy) = ((v.pos.x / cell).floor(), (v.pos.y / cell).floor());
+            let (mx, my) = ((cx + 0.5) * cell, (cy + 0.5) * cell);
+            let d = (v.pos.x - mx).hypot(v.pos.y - my);
+            let key = (v.pos.floor, cx as i64, cy as i64);
+            let e = best.entry(key).or_insert((f64::INFINITY, i));
+            if d < e.0 {
+                *e = (d, i);
+            }
+        }
+        if best.len() <= cap || cell > 1e7 {
+            let mut out: Vec<usize> = best.values().map(|&(_, i)| i).collect();
+            out.sort_unstable();
+            return out;
+        }
+        cell *= 2.0;
+    }
+}
+
+/// The search score: the surrogate value, less a small penalty per reversal for a
+/// person (so that of two nearly equal walks the one without pacing wins).
+fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
+    let v = s.value(walk)?;
+    if matches!(p.engine.model(), SurveyorModel::Human { .. }) {
+        Ok(v * (1.0 - 0.003 * reversals(p, walk) as f64))
+    } else {
+        Ok(v)
+    }
+}
+
+/// Statistics of a large-building search, for progress messages and the benchmark.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Stats {
+    pub batches: usize,
+    pub accepted: usize,
+    pub surrogate_evals: usize,
+}
+
+/// `auto` on a large building (see the module doc). `seed` drives every random choice.
+pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)> {
+    let mut stats = Stats::default();
+    let human = matches!(p.engine.model(), SurveyorModel::Human { .. });
+    let report = |f: f64, u: f64, m: String| run.report(Algorithm::Auto, f, Some(u), m);
+    let sur = Surrogate::new(p)?;
+    let ell = p.engine.kernel().ell;
+
+    // 1. Constructions for a few novelty radii, judged by the surrogate.
+    let radii: Vec<f64> = [0.0, 0.125, 0.25, 0.5, 1.0]
+        .iter()
+        .map(|f| f * ell)
+        .collect();
+    let base = Leg {
+        from: p.start,
+        prev: None,
+        to: p.end,
+        budget: p.budget,
+        radius: 0.0,
+        any_fit: true,
+        avoid_reversals: human,
+    };
+    let built: Vec<(Vec<usize>, f64)> = radii
+        .par_iter()
+        .map(|&r| {
+            let w = leg(p, &Leg { radius: r, ..base }, &[], None, run);
+            let s = score(p, &sur, &w).unwrap_or(f64::NEG_INFINITY);
+            (w, s)
+        })
+        .collect();
+    stats.surrogate_evals += built.len();
+    let (mut cur, mut cur_s) = built
+        .iter()
+        .cloned()
+        .fold((Vec::new(), f64::NEG_INFINITY), |a, b| {
+            if b.1 > a.1 { b } else { a }
+        });
+    let first = cur.clone();
+    // How long one exact evaluation of a full-budget walk will take, from the time of a
+    // surrogate evaluation scaled by the cube of the matrix sizes (with a margin for the
+    // larger matrix's cache misses): the time the final comparison needs.
+    let t_exact = estimate_exact(p, &sur, &cur);
+    report(
+        0.1,
+        cur_s,
+        format!("spread construction, {:.0} m (surrogate value)", p.length(&cur)),
+    );
+
+    // 2. Large-neighbourhood search until the time left is what the final exact
+    //    comparison needs (three walks, in parallel on two threads: two rounds), or a
+    //    bounded number of batches without a time limit.
+    // Two exact evaluations in parallel (the search's best and the coverage walk), with a
+    // margin for a busy machine.
+    let reserve = t_exact.mul_f64(1.5) + Duration::from_millis(60);
+    let stop_at = run.deadline().map(|d| d.checked_sub(reserve).unwrap_or(d));
+    let max_batches = if stop_at.is_some() { usize::MAX } else { 400 };
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5ca1_ab1e);
+    let mut stale = 0usize;
+    while stats.batches < max_batches && !run.should_stop() {
+        if stop_at.is_some_and(|t| Instant::now() >= t) {
+            break;
+        }
+        stats.batches += 1;
+        // Draw the batch's moves sequentially (deterministic), evaluate in parallel.
+        let moves: Vec<(usize, usize, f64, u64)> = (0..BATCH)
+            .map(|_| {
+                let n = cur.len();
+                let frac = rng.random_range(0.05..0.35);
+                let i = rng.random_range(0..n.max(1));
+                let span = ((n as f64 * frac).ceil() as usize).max(1);
+                let j = (i + span).min(n - 1);
+                let r = radii[rng.random_range(0..radii.len())];
+                (i, j, r, rng.random())
+            })
+            .collect();
+        let cands: Vec<(Vec<usize>, f64)> = moves
+            .par_iter()
+            .filter_map(|&(i, j, r, s)| {
+                let w = rebuild(p, &cur, i, j, r, human, s, run);
+                let sc = score(p, &sur, &w).ok()?;
+                Some((w, sc))
+            })
+            .collect();
+        stats.surrogate_evals += cands.len();
+        let best = cands
+            .into_iter()
+            .fold(None::<(Vec<usize>, f64)>, |a, b| match a {
+                Some(a) if !better((&b.0, b.1), (&a.0, a.1)) => Some(a),
+                _ => Some(b),
+            });
+        if let Some((w, s)) = best
+            && s > cur_s * (1.0 + 1e-9)
+        {
+            cur = w;
+            cur_s = s;
+            stats.accepted += 1;
+            stale = 0;
+        } else {
+            stale += 1;
+        }
+        if stats.batches.is_multiple_of(8) {
+            let frac = run.time_fraction().unwrap_or(stats.batches as f64 / 400.0);
+            report(
+                0.1 + 0.8 * frac,
+                cur_s,
+                format!(
+                    "search: batch {}, {} accepted, best walk {:.0} m",
+                    stats.batches,
+                    stats.accepted,
+                    p.length(&cur)
+                ),
+            );
+        }
+        if stop_at.is_none() && stale >= 60 {
+            break;
+        }
+    }
+
+    // 3. Exact comparison of the finalists (only the search's walk when cancelled: the
+    //    caller wants an answer now).
+    if run.control_cancelled() {
+        let u = p.utility(&cur)?;
+        p.offer(run, &cur, u);
+        return Ok((Outcome::new(cur, u, Termination::Cancelled), stats));
+    }
+    let coverage = leg(
+        p,
+        &Leg {
+            any_fit: false,
+            avoid_reversals: false,
+            ..base
+        },
+        &[],
+        None,
+        run,
+    );
+    let mut finalists = vec![cur, coverage];
+    if t_exact < run.time_limit().unwrap_or(Duration::MAX) / 10 {
+        finalists.push(first);
+    }
+    let exact: Vec<Result<f64>> = finalists.par_iter().map(|w| p.utility(w)).collect();
+    let mut out: Option<(Vec<usize>, f64)> = None;
+    for (w, u) in finalists.into_iter().zip(exact) {
+        let u = u?;
+        p.offer(run, &w, u);
+        if out.as_ref().is_none_or(|(bw, bu)| better((&w, u), (bw, *bu))) {
+            out = Some((w, u));
+        }
+    }
+    let (walk, utility) = out.unwrap_or_else(|| (p.shortest_walk(), 0.0));
+    let term = if run.out_of_time() {
+        Termination::TimeLimit
+    } else {
+        Termination::Completed
+    };
+    report(1.0, utility, "done".into());
+    Ok((Outcome::new(walk, utility, term), stats))
+}
+
+/// Estimated time of one exact evaluation of `walk`: a timed surrogate evaluation scaled
+/// by the cube of the ratio of the matrix sizes, times 2 for the cache misses of the
+/// larger matrix.
+fn estimate_exact(p: &Problem, sur: &Surrogate, walk: &[usize]) -> Duration {
+    let t0 = Instant::now();
+    let _ = sur.value(walk);
+    let ts = t0.elapsed().as_secs_f64();
+    let nd = (p.building.pilot.len() + p.engine.prior_observations().len()) as f64;
+    let samples = p.length(walk) / p.engine.model().spacing() + 1.0;
+    let n_exact = nd + samples + p.building.len() as f64;
+    let n_sur = nd + samples / sur.bin() as f64 + sur.vertices() as f64;
+    Duration::from_secs_f64(ts * (n_exact / n_sur).powi(3) * 2.0)
+}
+
+/// `walk` with its stretch `walk[i..=j]` rebuilt by a randomised spread leg of novelty
+/// radius `radius` that counts the rest of the walk as walked and uses the budget left.
+#[allow(clippy::too_many_arguments)]
+fn rebuild(
+    p: &Problem,
+    walk: &[usize],
+    i: usize,
+    j: usize,
+    radius: f64,
+    human: bool,
+    seed: u64,
+    run: &Run,
+) -> Vec<usize> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (head, tail) = (&walk[..=i], &walk[j..]);
+    let fixed = p.length(head) + p.length(tail);
+    let mut context: Vec<usize> = head.to_vec();
+    // The tail counts as walked too; joined through a break that marks no edge.
+    let mut ctx_tail = tail.to_vec();
+    context.append(&mut ctx_tail);
+    let spec = Leg {
+        from: walk[i],
+        prev: i.checked_sub(1).map(|k| walk[k]),
+        to: walk[j],
+        budget: (p.budget - fixed).max(0.0),
+        radius,
+        any_fit: true,
+        avoid_reversals: human,
+    };
+    let mid = leg(p, &spec, &context, Some(&mut rng), run);
+    let mut out = head.to_vec();
+    out.extend_from_slice(&mid[1..]);
+    out.extend_from_slice(&tail[1..]);
+    out
+}

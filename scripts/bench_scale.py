@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Planning at building scale: auto (default 2 s limit) against the systematic `coverage`
+walk on generated buildings of about 130, 290 (two floors), 565 and 5,000 vertices, at
+25%, 50% and 100% of each building's total edge length. Every plan runs as its own
+`trailprint plan` process under /usr/bin/time, so the wall time and the peak memory are
+the whole process's (set-up included).
+
+    python3 scripts/bench_scale.py [--long 60] [--model robot|human] [--out docs/benchmark-scale.md]
+
+--long S adds an `auto` run with an S-second limit on every row (the 97% target).
+Needs the release binary: cargo build --release -p trailprint-core --bin trailprint.
+"""
+import argparse, json, math, os, subprocess, sys, tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.path.join(ROOT, "target", "release", "trailprint")
+BUILDINGS = [
+    ("office", ["--rooms", "4", "--corridor-length", "40", "--room-depth", "8"]),
+    ("campus", ["--floors", "2", "--rooms", "6", "--corridor-length", "48", "--room-depth", "8"]),
+    ("mall", ["--rooms", "12", "--corridor-length", "120", "--room-depth", "12"]),
+    ("huge", ["--rooms", "40", "--corridor-length", "400", "--room-depth", "24"]),
+]
+
+
+def total_length(path):
+    d = json.load(open(path))
+    pos = {v["id"]: (v["x"], v["y"]) for v in d["vertices"]}
+    tot = 0.0
+    for e in d["edges"]:
+        a, b = pos[e["a"]], pos[e["b"]]
+        tot += e.get("length", math.hypot(a[0] - b[0], a[1] - b[1]))
+    return len(d["vertices"]), tot
+
+
+def plan(path, budget, alg, limit, model, seed=1):
+    cmd = ["/usr/bin/time", "-f", "%e %M", BIN, "plan", "--building", path, "--start", "f0-c00",
+           "--end", "f0-c00", "--budget", f"{budget:.1f}", "--algorithm", alg, "--model", model,
+           "--seed", str(seed), "--json"]
+    if limit is not None:
+        cmd += ["--time-limit", str(limit)]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    wall, rss = p.stderr.strip().splitlines()[-1].split()
+    out = {"wall_s": float(wall), "rss_mb": int(rss) / 1024}
+    if p.returncode != 0:
+        msg = [l for l in p.stderr.splitlines() if l.startswith("error")]
+        out["error"] = msg[0] if msg else p.stderr.strip()[:200]
+        return out
+    d = json.loads(p.stdout)
+    walk = d["walk"]
+    rev = sum(1 for i in range(1, len(walk) - 1) if walk[i - 1] == walk[i + 1])
+    out.update(length=d["length_m"], utility=d["utility_nats"], term=d["termination"],
+               reversals_per_100m=100.0 * rev / max(d["length_m"], 1e-9))
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--long", type=float, default=0)
+    ap.add_argument("--model", default="robot")
+    ap.add_argument("--only", default="")
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp()
+    rows = []
+    for name, args in BUILDINGS:
+        if a.only and name not in a.only.split(","):
+            continue
+        path = os.path.join(tmp, f"{name}.json")
+        subprocess.run([BIN, "generate", "--out", path, "--name", name, *args], check=True,
+                       capture_output=True)
+        nv, tot = total_length(path)
+        for frac in (0.25, 0.5, 1.0):
+            budget = frac * tot
+            cov = plan(path, budget, "coverage", None, a.model)
+            auto = plan(path, budget, "auto", None, a.model)
+            row = dict(building=name, vertices=nv, edges_m=tot, budget=budget, coverage=cov, auto=auto)
+            if a.long:
+                row["auto_long"] = plan(path, budget, "auto", a.long, a.model)
+            rows.append(row)
+            print(json.dumps(row), file=sys.stderr, flush=True)
+    lines = [f"| building | vertices | budget m | coverage nats | auto nats | auto / coverage | auto length / budget | auto wall s | auto peak MiB | reversals per 100 m |" + (f" auto {a.long:g} s nats | 2 s / {a.long:g} s |" if a.long else ""),
+             "|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if a.long else "")]
+    for r in rows:
+        c, u = r["coverage"], r["auto"]
+        if "error" in u:
+            lines.append(f"| {r['building']} | {r['vertices']} | {r['budget']:.0f} | {c.get('utility', float('nan')):.2f} | refused: {u['error'][:160]} | | | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | |" + (" | |" if a.long else ""))
+            continue
+        line = (f"| {r['building']} | {r['vertices']} | {r['budget']:.0f} | {c['utility']:.2f} | {u['utility']:.2f} | "
+                f"{u['utility'] / c['utility']:.3f} | {u['length'] / r['budget']:.3f} | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | {u['reversals_per_100m']:.2f} |")
+        if a.long:
+            l = r["auto_long"]
+            line += f" {l.get('utility', float('nan')):.2f} | {u['utility'] / l.get('utility', float('nan')):.3f} |"
+        lines.append(line)
+    text = "\n".join(lines)
+    print(text)
+    if a.out:
+        open(a.out, "w").write(text + "\n")
+
+
+if __name__ == "__main__":
+    main()
