@@ -41,6 +41,12 @@ impl Solver for Coverage {
         let walk = build(p, 0.0, false, run);
         let utility = p.utility(&walk)?;
         p.offer(run, &walk, utility);
+        run.report(
+            Algorithm::Coverage,
+            1.0,
+            Some(utility),
+            format!("{:.0} m walked", p.length(&walk)),
+        );
         Ok(Outcome::new(walk, utility, Termination::Completed))
     }
 }

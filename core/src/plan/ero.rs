@@ -76,12 +76,12 @@ impl Solver for Ero {
         let mut it = 0usize;
         while it < iters {
             it += 1;
-            if it.is_multiple_of(16) {
-                run.check()?;
-                if run.out_of_time() {
-                    term = Termination::TimeLimit;
-                    break;
-                }
+            // Every iteration: one evaluation costs up to tens of milliseconds on a large
+            // building, and the time limit is honoured to within one of them.
+            run.check()?;
+            if run.out_of_time() {
+                term = Termination::TimeLimit;
+                break;
             }
             let mut cand = seq.clone();
             if cand.is_empty() || rng.random_bool(0.6) {
@@ -107,6 +107,7 @@ impl Solver for Ero {
                 seq = cand;
                 walk = w;
                 util = u;
+                p.offer(run, &walk, util);
             }
             if it.is_multiple_of(64) {
                 let frac = if iters == usize::MAX {

@@ -195,6 +195,7 @@ impl Shared<'_> {
         {
             *g = (walk.to_vec(), u);
             self.best_bits.store(u.to_bits(), Ordering::Relaxed);
+            self.p.offer(self.run, walk, u);
         }
     }
 
@@ -233,7 +234,9 @@ impl Shared<'_> {
             return Ok(());
         }
         *local += 1;
-        if *local >= 256 {
+        // Every 256 nodes on small buildings; every node on large ones, where one node's
+        // evaluation costs milliseconds and 256 of them would overrun the time limit.
+        if *local >= 256 || self.p.building.len() > super::auto::LARGE_VERTICES {
             self.nodes.fetch_add(*local, Ordering::Relaxed);
             *local = 0;
             self.run.check()?;
@@ -300,6 +303,7 @@ impl Solver for Exact {
             }
         };
         let inc_u = p.utility(&inc)?;
+        p.offer(run, &inc, inc_u);
         let bound = if self.bound {
             per_sample_bound(p)
         } else {

@@ -248,7 +248,10 @@ impl<'p> Fitness<'p> {
             .collect();
         todo.sort_unstable();
         todo.dedup();
-        for chunk in todo.chunks(64) {
+        // Chunks of two walks per thread: the deadline is checked between chunks, and on a
+        // large building one walk costs tens of milliseconds.
+        let chunk_len = (2 * rayon::current_num_threads()).max(2);
+        for chunk in todo.chunks(chunk_len) {
             run.check()?;
             if run.out_of_time() {
                 break;
@@ -305,6 +308,11 @@ impl Genetic {
         let mut attempts = 0;
         while walks.len() < size && attempts < size * 4 {
             attempts += 1;
+            // A random walk inserts every vertex at its cheapest position: milliseconds
+            // on a large building, so the deadline is checked as they are drawn.
+            if attempts % 4 == 0 && run.should_stop() {
+                break;
+            }
             let w = random_walk(p, &mut rng);
             if !walks.contains(&w) {
                 walks.push(w);
@@ -348,6 +356,9 @@ impl Genetic {
             let mut tries = 0;
             while kids.len() < size && tries < size * 4 {
                 tries += 1;
+                if tries % 4 == 0 && run.should_stop() {
+                    break;
+                }
                 let a = tournament(&pop, prm.tournament, &mut rng);
                 let b = tournament(&pop, prm.tournament, &mut rng);
                 let Some((c1, c2)) = crossover(&a.walk, &b.walk, &mut rng) else {
@@ -376,6 +387,7 @@ impl Genetic {
                 }
             }
             pop = select(pop, size);
+            p.offer(run, &pop[0].walk, pop[0].utility);
             run.report(
                 Algorithm::Genetic,
                 (g + 1) as f64 / prm.generations.max(1) as f64,

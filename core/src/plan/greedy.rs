@@ -144,6 +144,7 @@ impl Solver for Greedy {
                 .filter(|&v| v != p.start && v != p.end)
                 .collect();
             round += 1;
+            p.offer(run, &walk, utility);
             run.report(
                 Algorithm::Greedy,
                 (length / p.budget).min(1.0),

@@ -285,6 +285,7 @@ impl LocalSearch {
                 Some((k, u)) => {
                     walk = std::mem::take(&mut moves[k].walk);
                     utility = u;
+                    p.offer(run, &walk, utility);
                     pre = Prefixes::new(p, &walk)?;
                     idle = 0;
                 }

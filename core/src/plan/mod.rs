@@ -869,7 +869,20 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     let whole_walks = matches!(req.algorithm, Algorithm::Auto | Algorithm::Coverage)
         && building.len() > auto::LARGE_VERTICES;
     let incremental = if whole_walks { 0.0 } else { 2.0 * ns * (nd + ns + nv) };
-    let per_thread = 8.0 * (n * n + incremental);
+    // Branch and bound keeps a saved posterior (`|V| x |V|`) per level of its depth-first
+    // search, one level per edge of the deepest walk.
+    let min_edge = building
+        .edges
+        .iter()
+        .map(|e| e.length)
+        .fold(f64::INFINITY, f64::min)
+        .max(1e-3);
+    let marks = if req.algorithm == Algorithm::Exact {
+        (budget / min_edge).min(1e6) * nv * nv
+    } else {
+        0.0
+    };
+    let per_thread = 8.0 * (n * n + incremental + marks);
     // A fixed allowance for the process, the building and the search's own tables.
     let fixed = 16.0 * 1024.0 * 1024.0;
     (metric + engine + threads * per_thread + fixed).min(u64::MAX as f64) as u64

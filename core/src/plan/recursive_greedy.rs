@@ -195,6 +195,9 @@ impl Solver for RecursiveGreedy {
                         return Ok(None);
                     }
                     let r = c.split(&root, p.start, p.end, p.budget, self.depth, v, Some(b1));
+                    if let Ok(Some((w, u))) = &r {
+                        p.offer(run, w, *u);
+                    }
                     let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     run.report(
                         Algorithm::RecursiveGreedy,

@@ -1,0 +1,128 @@
+//! How well the large-building search surrogate (`plan::scale::Surrogate`) ranks walks,
+//! and what it costs: the figures of `docs/decisions/0003-search-surrogate.md`.
+//!
+//!     cargo run --release -p trailprint-core --example surrogate_error [-- --model human]
+//!
+//! On a generated mall (565 vertices) and a two-floor campus (290), draws 120 candidate
+//! walks the way the search does (randomised spread constructions at 25% and 50% of the
+//! edge length), evaluates each exactly and by the surrogate, and prints the rank
+//! correlation (Spearman), the share of pairs ordered the same way (Kendall's
+//! concordance), the share of pairs whose exact values differ by more than 2% that the
+//! surrogate orders the same way, and the time per evaluation of both.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use trailprint::building::Building;
+use trailprint::gp::fit_kernel;
+use trailprint::plan::coverage::{Leg, leg};
+use trailprint::plan::scale::Surrogate;
+use trailprint::plan::{Control, Problem, Run};
+use trailprint::samples::SurveyorModel;
+use trailprint::synth::{SynthParams, generate};
+
+fn ranks(v: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..v.len()).collect();
+    idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+    let mut r = vec![0.0; v.len()];
+    for (k, &i) in idx.iter().enumerate() {
+        r[i] = k as f64;
+    }
+    r
+}
+
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    sab / (saa * sbb).sqrt()
+}
+
+fn main() -> trailprint::Result<()> {
+    let human = std::env::args().any(|a| a == "human");
+    let model = if human {
+        SurveyorModel::human()
+    } else {
+        SurveyorModel::robot()
+    };
+    let cases = [
+        ("campus", 2usize, 6usize, 48.0, 8.0),
+        ("mall", 1, 12, 120.0, 12.0),
+    ];
+    println!(
+        "| building | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | surrogate ms | exact ms |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (name, floors, rooms, corridor, depth) in cases {
+        let params = SynthParams {
+            name: name.into(),
+            floors,
+            rooms_per_side: rooms,
+            corridor_length_m: corridor,
+            room_depth_m: depth,
+            ..SynthParams::default()
+        };
+        let synth = generate(&params)?;
+        let b = Arc::new(Building::from_file(synth.file, name)?);
+        let kernel = fit_kernel(&b.pilot)?.kernel;
+        let total = b.total_edge_length();
+        for frac in [0.25, 0.5] {
+            let budget = frac * total;
+            let p = Problem::new(b.clone(), kernel, model, 0, 0, budget)?;
+            let sur = Surrogate::new(&p)?;
+            let run = Run::new(Control::new(), None);
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let ell = kernel.ell;
+            let walks: Vec<Vec<usize>> = (0..120)
+                .map(|k| {
+                    let spec = Leg {
+                        from: 0,
+                        prev: None,
+                        to: 0,
+                        budget,
+                        radius: [0.0, 0.125, 0.25, 0.5, 1.0][k % 5] * ell,
+                        any_fit: true,
+                        avoid_reversals: human,
+                    };
+                    leg(&p, &spec, &[], Some(&mut rng), &run)
+                })
+                .collect();
+            let t0 = Instant::now();
+            let s: Vec<f64> = walks.iter().map(|w| sur.value(w)).collect::<Result<_, _>>()?;
+            let ts = t0.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
+            let t1 = Instant::now();
+            let e: Vec<f64> = walks.iter().map(|w| p.utility(w)).collect::<Result<_, _>>()?;
+            let te = t1.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
+            let rho = pearson(&ranks(&s), &ranks(&e));
+            let (mut conc, mut pairs, mut conc2, mut pairs2) = (0usize, 0usize, 0usize, 0usize);
+            for i in 0..walks.len() {
+                for j in i + 1..walks.len() {
+                    let same = (s[i] - s[j]) * (e[i] - e[j]) > 0.0;
+                    pairs += 1;
+                    conc += usize::from(same);
+                    if (e[i] - e[j]).abs() > 0.02 * e[i].max(e[j]) {
+                        pairs2 += 1;
+                        conc2 += usize::from(same);
+                    }
+                }
+            }
+            println!(
+                "| {name} ({} vertices, surrogate {}) | {} | {budget:.0} m | {} | {rho:.3} | {:.1}% | {:.1}% of {pairs2} | {ts:.2} | {te:.2} |",
+                b.len(),
+                sur.vertices(),
+                if human { "human" } else { "robot" },
+                walks.len(),
+                100.0 * conc as f64 / pairs as f64,
+                100.0 * conc2 as f64 / pairs2.max(1) as f64,
+            );
+        }
+    }
+    Ok(())
+}
