@@ -20,6 +20,8 @@ pub enum PlanAlgorithm {
     RecursiveGreedy,
     Ero,
     Exact,
+    /// The systematic walk (nearest unwalked edge first): the baseline.
+    Coverage,
 }
 
 impl From<PlanAlgorithm> for Algorithm {
@@ -31,6 +33,7 @@ impl From<PlanAlgorithm> for Algorithm {
             PlanAlgorithm::RecursiveGreedy => Algorithm::RecursiveGreedy,
             PlanAlgorithm::Ero => Algorithm::Ero,
             PlanAlgorithm::Exact => Algorithm::Exact,
+            PlanAlgorithm::Coverage => Algorithm::Coverage,
         }
     }
 }
@@ -44,6 +47,7 @@ impl From<Algorithm> for PlanAlgorithm {
             Algorithm::RecursiveGreedy => PlanAlgorithm::RecursiveGreedy,
             Algorithm::Ero => PlanAlgorithm::Ero,
             Algorithm::Exact => PlanAlgorithm::Exact,
+            Algorithm::Coverage => PlanAlgorithm::Coverage,
         }
     }
 }
@@ -65,6 +69,10 @@ pub struct PlanRequest {
     /// Stop with the best walk so far after this many seconds (null: the algorithm's
     /// default, 2 s for `auto`, none for the others).
     pub time_limit_s: Option<f64>,
+    /// Most memory the plan may use, MiB (null: 512). A request that would need more is
+    /// refused with `InvalidRequest` naming the size, before anything is allocated.
+    #[uniffi(default)]
+    pub memory_budget_mb: Option<u64>,
 }
 
 /// A progress report of a running plan.
@@ -75,6 +83,8 @@ pub struct PlanProgress {
     pub fraction: f64,
     /// Utility of the best walk so far, nats.
     pub best_utility_nats: Option<f64>,
+    /// Length of the best walk so far, metres.
+    pub best_length_m: Option<f64>,
     /// A short note (`generation 3/5`).
     pub message: String,
 }
@@ -85,6 +95,7 @@ impl From<&Progress> for PlanProgress {
             algorithm: p.algorithm.into(),
             fraction: p.fraction,
             best_utility_nats: p.best_utility,
+            best_length_m: p.best_length,
             message: p.message.clone(),
         }
     }
@@ -107,7 +118,8 @@ impl Observer for ListenerObserver {
 
 /// One planning call: made by [`TrailprintStore::new_plan`], run once with
 /// [`PlanJob::run`] (blocking; call it off the main thread), cancelled from any thread
-/// with [`PlanJob::cancel`], which makes `run` fail with `Cancelled`.
+/// with [`PlanJob::cancel`], which makes `run` return promptly with the best walk found so
+/// far (`termination` = `cancelled`), saved like any other plan.
 #[derive(uniffi::Object)]
 pub struct PlanJob {
     store: Arc<TrailprintStore>,
@@ -134,9 +146,9 @@ impl PlanJob {
         self.request.clone()
     }
 
-    /// Plans, reporting progress to `listener`, and saves the plan in the store. Fails
-    /// with `Cancelled` after [`cancel`](Self::cancel), and with `InvalidRequest` when run
-    /// a second time.
+    /// Plans, reporting progress to `listener`, and saves the plan in the store. After
+    /// [`cancel`](Self::cancel) it returns the best walk so far (`termination` =
+    /// `cancelled`); fails with `InvalidRequest` when run a second time.
     pub fn run(&self, listener: Option<Arc<dyn PlanListener>>) -> Result<PlanSummary> {
         {
             let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
@@ -173,6 +185,9 @@ pub(crate) fn core_request(
     req.model = r.surveyor.into();
     req.algorithm = r.algorithm.into();
     req.seed = r.seed;
+    if let Some(mb) = r.memory_budget_mb {
+        req.memory_budget = mb.saturating_mul(1 << 20);
+    }
     req.time_limit = match r.time_limit_s {
         None => None,
         Some(s) if s.is_finite() && s > 0.0 => Some(std::time::Duration::from_secs_f64(s)),
@@ -201,7 +216,9 @@ impl TrailprintStore {
         let res = trailprint::plan::plan_with_prior(building, &req, &prior, control)?;
         let record = PlanRecord::from_plan(&req, &res, core_store::now_ms());
         let id = self.inner.save_plan(r.building_id, &record)?;
-        Ok(self.inner.load_plan(id)?.into())
+        let mut summary: PlanSummary = self.inner.load_plan(id)?.into();
+        summary.termination = Some(res.termination.name().to_string());
+        Ok(summary)
     }
 }
 

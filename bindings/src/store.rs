@@ -75,6 +75,10 @@ pub struct PlanSummary {
     /// cannot read).
     pub surveyor: Option<SurveyorProfile>,
     pub created_ms: i64,
+    /// Why the planner stopped (`completed`, `optimal`, `time_limit`, `cancelled`), for
+    /// the plan a `PlanJob.run` just made; null for plans read back from the store.
+    #[uniffi(default)]
+    pub termination: Option<String>,
 }
 
 impl From<trailprint::store::StoredPlan> for PlanSummary {
@@ -98,6 +102,7 @@ impl From<trailprint::store::StoredPlan> for PlanSummary {
             seed: r.seed,
             kernel: r.kernel.into(),
             created_ms: r.created_ms,
+            termination: None,
         }
     }
 }

@@ -87,6 +87,7 @@ impl TrailprintStore {
                 algorithm: request.algorithm,
                 seed: request.seed,
                 time_limit_s: request.time_limit_s,
+                memory_budget_mb: None,
             },
             kernel,
         )?;

@@ -41,6 +41,7 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
         algorithm: PlanAlgorithm::Genetic,
         seed: 3,
         time_limit_s: None,
+        memory_budget_mb: None,
     });
     let planned = job.run(None).expect("plan");
     assert_eq!(planned.walk.first(), Some(&start));

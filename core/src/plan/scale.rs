@@ -176,7 +176,12 @@ pub struct Stats {
 pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)> {
     let mut stats = Stats::default();
     let human = matches!(p.engine.model(), SurveyorModel::Human { .. });
-    let report = |f: f64, u: f64, m: String| run.report(Algorithm::Auto, f, Some(u), m);
+    // Progress shows the exact utility of the best walk offered so far (none before the
+    // first exact evaluation).
+    let report = |f: f64, m: String| {
+        let best = run.incumbent().map(|(_, u)| u);
+        run.report(Algorithm::Auto, f, best, m)
+    };
     let sur = Surrogate::new(p)?;
     let ell = p.engine.kernel().ell;
 
@@ -214,10 +219,20 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // surrogate evaluation scaled by the cube of the matrix sizes (with a margin for the
     // larger matrix's cache misses): the time the final comparison needs.
     let t_exact = estimate_exact(p, &sur, &cur);
+    // Exact evaluations during the search, when they are cheap beside the limit (at most
+    // a tenth of it each): the construction at once, then the current walk whenever its
+    // surrogate value has grown by 1%, so that progress and a cancel show exact figures.
+    let limit = run.time_limit().unwrap_or(Duration::from_secs(3600));
+    let exact_offers = t_exact < limit / 10;
+    let mut offered_s = f64::NEG_INFINITY;
+    if exact_offers {
+        let u = p.utility(&cur)?;
+        p.offer(run, &cur, u);
+        offered_s = cur_s;
+    }
     report(
         0.1,
-        cur_s,
-        format!("spread construction, {:.0} m (surrogate value)", p.length(&cur)),
+        format!("spread construction, {:.0} m", p.length(&cur)),
     );
 
     // 2. Large-neighbourhood search until the time left is what the final exact
@@ -272,11 +287,15 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         } else {
             stale += 1;
         }
+        if exact_offers && cur_s > offered_s * 1.01 && stats.batches.is_multiple_of(4) {
+            let u = p.utility(&cur)?;
+            p.offer(run, &cur, u);
+            offered_s = cur_s;
+        }
         if stats.batches.is_multiple_of(8) {
             let frac = run.time_fraction().unwrap_or(stats.batches as f64 / 400.0);
             report(
                 0.1 + 0.8 * frac,
-                cur_s,
                 format!(
                     "search: batch {}, {} accepted, best walk {:.0} m",
                     stats.batches,
@@ -327,7 +346,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     } else {
         Termination::Completed
     };
-    report(1.0, utility, "done".into());
+    report(1.0, "done".into());
     Ok((Outcome::new(walk, utility, term), stats))
 }
 

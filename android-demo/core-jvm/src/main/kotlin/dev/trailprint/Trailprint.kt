@@ -69,8 +69,8 @@ class Trailprint(
 
     /**
      * Plans [request]: progress events while it runs, then [PlanEvent.Done] with the saved
-     * plan. Cancelling the collector cancels the native planner (it stops within one of
-     * its progress checks).
+     * plan. Cancelling the collector cancels the native planner: it stops within one of
+     * its progress checks and saves its best walk so far (`termination` = `cancelled`).
      */
     fun plan(request: PlanRequest): Flow<PlanEvent> = callbackFlow {
         val job = store.newPlan(request)
