@@ -85,6 +85,12 @@ class SurveyScreenTest {
             model.finish().join()
             val done = withTimeout(30_000) { model.state.first { it.finished != null } }
             assertEquals(SessionStatus.FINISHED, done.finished!!.status)
+            model.close()
+            // A screen opened later on the same service does not take that end for its own.
+            val later = SurveyModel(lifecycle, scope)
+            assertEquals(done.sessionId, withTimeout(30_000) { later.state.first { it.map != null } }.sessionId)
+            assertNull(later.state.value.finished)
+            assertTrue(!later.hasActiveSurvey)
             scope.cancel()
 
             val exports = ExportFiles(File(dir, "exports"), api)

@@ -104,10 +104,11 @@ class SurveyModel(private val lifecycle: SurveyLifecycle, private val scope: Cor
     /** True while a survey runs (the screen shows it instead of starting another). */
     val hasActiveSurvey: Boolean get() = lifecycle.state.value.active != null
 
-    init {
-        // Every change of the lifecycle redraws from its latest state.
-        scope.launch { lifecycle.state.collect { publish() } }
-    }
+    // Every change of the lifecycle redraws from its latest state.
+    private val watcher = scope.launch { lifecycle.state.collect { publish() } }
+
+    /** Stops drawing (the screen is gone); operations already started run to their end. */
+    fun close() = watcher.cancel()
 
     /**
      * Recomputes the screen from the lifecycle's *current* state (read and written under
