@@ -61,20 +61,39 @@ class LifecycleTest {
             throw AssertionError("timed out waiting for $what; state: ${lifecycle.state.value}", e)
         }
 
+        /** Waits until the running controller's state (the source of the lifecycle's) satisfies [p]. */
+        suspend fun awaitLive(what: String, p: (dev.trailprint.survey.SurveyLive) -> Boolean) {
+            val c = lifecycle.controller ?: throw AssertionError("no survey runs while waiting for $what")
+            try {
+                withTimeout(20_000) { c.state.first(p) }
+            } catch (e: Exception) {
+                throw AssertionError("timed out waiting for $what; live: ${c.state.value}", e)
+            }
+        }
+
         /** One step, [ms] after the last event, acknowledged. */
         suspend fun step(ms: Long = 600) {
-            val seq = lifecycle.state.value.live.lastAck?.seq ?: 0
+            val seq = lifecycle.controller!!.state.value.lastAck?.seq ?: 0
             now.addAndGet(ms)
             sensors.step()
-            await("step ack after seq $seq") { (it.live.lastAck?.seq ?: 0) > seq }
+            awaitLive("step ack after seq $seq") { (it.lastAck?.seq ?: 0) > seq }
         }
 
         /** One completed scan, acknowledged with a fingerprint. */
         suspend fun scan(i: Int) {
-            val n = lifecycle.state.value.live.progress?.samples ?: 0uL
+            val n = lifecycle.controller!!.state.value.progress?.samples ?: 0uL
             now.addAndGet(100)
             sensors.scan(now.get(), "aa:aa" to -50 - i, "bb:bb" to -70 + i)
-            await("sample ${n + 1uL}") { (it.live.progress?.samples ?: 0uL) > n }
+            awaitLive("sample ${n + 1uL}") { (it.progress?.samples ?: 0uL) > n }
+        }
+    }
+
+    /** Waits (polling) until [cond] holds: for conditions outside the lifecycle's state. */
+    private suspend fun poll(what: String, cond: () -> Boolean) {
+        try {
+            withTimeout(20_000) { while (!cond()) kotlinx.coroutines.delay(5) }
+        } catch (e: Exception) {
+            throw AssertionError("timed out waiting for $what", e)
         }
     }
 
@@ -90,7 +109,7 @@ class LifecycleTest {
         val first = Process(db)
         val active = first.lifecycle.start(planId, SurveyMode.HUMAN)
         first.await("running") { it.phase == SurveyPhase.RUNNING && it.live.guidance != null }
-        assertTrue(first.sensors.listening.get() >= 2, "steps and scans are listened to")
+        poll("steps and scans listened to") { first.sensors.listening.get() >= 2 }
         assertNotNull(first.lifecycle.controller!!.checkIn("c00", now.get()))
         repeat(4) { first.step() }
         first.scan(1)
@@ -99,7 +118,8 @@ class LifecycleTest {
         repeat(2) { first.step() }
         first.scan(2)
         assertTrue(first.sensors.scanRequests.get() >= 1, "scans are requested while steps are handled")
-        val before = first.lifecycle.state.value.live.progress!!
+        // What the session has acknowledged (it is on disk) at the moment of the kill.
+        val before = first.lifecycle.controller!!.session.progress()
         val samplesBefore = first.lifecycle.controller!!.session.samples()
 
         // The process dies: its coroutines stop mid-survey; nothing is finished or closed.
@@ -116,7 +136,7 @@ class LifecycleTest {
         assertEquals(before.collectedUtilityNats, p.collectedUtilityNats)
         assertEquals(samplesBefore.map { it.seq to it.rss }, second.lifecycle.controller!!.session.samples().map { it.seq to it.rss })
         assertEquals(samplesBefore.size, back.live.track.size, "the walked track is drawn again")
-        second.await("sensors back on") { second.sensors.listening.get() >= 2 }
+        poll("sensors back on") { second.sensors.listening.get() >= 2 }
 
         // And the walk goes on to the end.
         repeat(3) { second.step() }
@@ -129,7 +149,7 @@ class LifecycleTest {
         assertEquals(9uL, summary.steps)
         assertEquals(3u, summary.checkIns)
         assertEquals(SurveyPhase.FINISHED, second.lifecycle.state.value.phase)
-        assertEquals(0, second.sensors.listening.get(), "sensors are off after the survey")
+        poll("sensors off after the survey") { second.sensors.listening.get() == 0 }
         assertFalse(File(dir, "active.json").exists())
         // A third start finds no survey to carry on.
         assertNull(Process(db).lifecycle.restore())
@@ -146,18 +166,19 @@ class LifecycleTest {
         now.addAndGet(1000)
         first.lifecycle.pause()
         first.await("paused") { it.phase == SurveyPhase.PAUSED }
-        assertEquals(0, first.sensors.listening.get(), "no sensor runs while paused")
+        poll("no sensor running while paused") { first.sensors.listening.get() == 0 }
         first.scope.cancel()
 
         val second = Process(db)
         assertNotNull(second.lifecycle.restore())
         second.await("paused after restart") { it.phase == SurveyPhase.PAUSED }
-        assertEquals(0, second.sensors.listening.get())
+        kotlinx.coroutines.delay(50)
+        assertEquals(0, second.sensors.listening.get(), "a paused survey restarts with its sensors off")
         assertEquals("Survey paused", second.lifecycle.state.value.notificationTitle())
         now.addAndGet(60_000)
         second.lifecycle.resume()
         second.await("running again") { it.phase == SurveyPhase.RUNNING }
-        second.await("sensors on") { second.sensors.listening.get() >= 2 }
+        poll("sensors on") { second.sensors.listening.get() >= 2 }
         second.step()
         now.addAndGet(1000)
         val s = second.lifecycle.abort("test over")!!

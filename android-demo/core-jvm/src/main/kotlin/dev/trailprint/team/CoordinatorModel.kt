@@ -219,6 +219,9 @@ class CoordinatorModel(
 
     fun dismissError() = _state.update { it.copy(error = null) }
 
+    /** Shows an error from outside the store (a shared file that could not be read). */
+    fun reportError(message: String) = _state.update { it.copy(error = message) }
+
     private fun busy(block: suspend () -> Unit) = scope.launch {
         _state.update { it.copy(busy = true, error = null) }
         try {

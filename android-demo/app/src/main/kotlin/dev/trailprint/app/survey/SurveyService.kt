@@ -31,6 +31,7 @@ import kotlinx.coroutines.cancel
 import kotlinx.coroutines.delay
 import kotlinx.coroutines.flow.conflate
 import kotlinx.coroutines.flow.distinctUntilChanged
+import kotlinx.coroutines.flow.drop
 import kotlinx.coroutines.flow.map
 import kotlinx.coroutines.launch
 
@@ -74,6 +75,15 @@ class SurveyService : Service() {
                     delay(1000) // Android drops notification updates that come faster
                 }
         }
+        // The survey ended (from the screen or the notification): leave the foreground.
+        scope.launch {
+            lifecycle.state.map { it.active != null }.distinctUntilChanged().drop(1).collect { running ->
+                if (!running) {
+                    ServiceCompat.stopForeground(this@SurveyService, ServiceCompat.STOP_FOREGROUND_REMOVE)
+                    stopSelf()
+                }
+            }
+        }
     }
 
     override fun onStartCommand(intent: Intent?, flags: Int, startId: Int): Int {
@@ -83,7 +93,9 @@ class SurveyService : Service() {
                 if (Build.VERSION.SDK_INT >= 29) ServiceInfo.FOREGROUND_SERVICE_TYPE_LOCATION else 0,
             )
         } catch (e: SecurityException) {
-            // Android 14+: a location service needs the location permission (the screen asks first).
+            // Android 14+: a location service needs the location permission (the screen asks
+            // first), and may not start from the background (a restart by the system after a
+            // kill can be refused): the record stays, and opening the app carries on.
             lifecycle.reportError("The survey cannot run in the background: ${e.message}")
             stopSelf()
             return START_NOT_STICKY

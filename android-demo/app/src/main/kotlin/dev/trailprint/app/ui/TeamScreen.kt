@@ -10,6 +10,7 @@ import androidx.compose.foundation.layout.fillMaxSize
 import androidx.compose.foundation.layout.fillMaxWidth
 import androidx.compose.foundation.layout.height
 import androidx.compose.foundation.layout.padding
+import androidx.compose.foundation.horizontalScroll
 import androidx.compose.foundation.rememberScrollState
 import androidx.compose.foundation.verticalScroll
 import androidx.compose.material3.AlertDialog
@@ -62,8 +63,12 @@ class TeamViewModel(app: Application) : AndroidViewModel(app) {
     }
 
     fun importUris(uris: List<Uri>) = viewModelScope.launch {
-        val files = withContext(Dispatchers.IO) { uris.map { getApplication<Application>().readDocument(it) } }
-        model.importBundles(files.map { it.name to it.text })
+        try {
+            val files = withContext(Dispatchers.IO) { uris.map { getApplication<Application>().readDocument(it) } }
+            model.importBundles(files.map { it.name to it.text })
+        } catch (e: java.io.IOException) {
+            model.reportError("Cannot read the file: ${e.message}")
+        }
     }
 }
 
@@ -83,7 +88,7 @@ fun TeamScreen(vm: TeamViewModel = viewModel()) {
         Button(onClick = { picker.launch(arrayOf("application/json", "application/octet-stream", "*/*")) }) { Text("Import bundles") }
         if (s.busy) LinearProgressIndicator(Modifier.fillMaxWidth())
         s.receipts.forEach { Text(it.line(), style = MaterialTheme.typography.bodySmall) }
-        Row(horizontalArrangement = Arrangement.spacedBy(4.dp)) {
+        Row(Modifier.horizontalScroll(rememberScrollState()), horizontalArrangement = Arrangement.spacedBy(4.dp)) {
             s.buildings.forEach { b -> FilterChip(b.id == s.buildingId, { m.selectBuilding(b.id) }, { Text("${b.name} (${b.collected})") }) }
         }
         s.map?.let { map ->
@@ -110,7 +115,7 @@ fun TeamScreen(vm: TeamViewModel = viewModel()) {
             Text("Team: %.2f nats together".format(t.summary.teamUtilityNats))
             t.assignments.zip(t.files).forEach { (a, f) ->
                 Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
-                    Text("${a.member}. ${a.surveyorName ?: ""}: %.0f m, %d vertices".format(a.lengthM, a.walk.size), Modifier.weight(1f))
+                    Text("${a.member}. ${a.surveyorName ?: ""}: ${"%.0f".format(a.lengthM)} m, ${a.walk.size} vertices", Modifier.weight(1f))
                     OutlinedButton(onClick = { m.share(f) }) { Text("Share walk") }
                 }
             }
