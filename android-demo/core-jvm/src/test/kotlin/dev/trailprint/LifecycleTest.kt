@@ -48,7 +48,7 @@ class LifecycleTest {
     }
 
     /** A "process": its own store object on the database file, its own scope and sensors. */
-    private inner class Process(db: File, val sensors: FakeSensors = FakeSensors(), lock: CountingWakeLock = CountingWakeLock()) {
+    private inner class Process(db: File, val sensors: FakeSensors = FakeSensors { now.get() }, lock: CountingWakeLock = CountingWakeLock()) {
         val api = Trailprint(dev.trailprint.ffi.TrailprintStore.open(db.path)).also { apis += it }
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default).also { scopes += it }
         val wakeLock = lock
@@ -97,9 +97,10 @@ class LifecycleTest {
         }
     }
 
-    private fun planOn(db: File): Long = dev.trailprint.ffi.TrailprintStore.open(db.path).use { store ->
+    private fun planOn(db: File, robot: Boolean = false): Long = dev.trailprint.ffi.TrailprintStore.open(db.path).use { store ->
         val bid = store.importBuildingJson(TestData.demoBuildingJson, "demo", false).id
-        store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }.id
+        val profile = if (robot) dev.trailprint.ffi.defaultRobotProfile() else defaultHumanProfile()
+        store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, profile, PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }.id
     }
 
     @Test
@@ -224,7 +225,33 @@ class LifecycleTest {
         // A robot survey over plain ws:// to a host outside the local names is refused up front.
         val ws = assertFailsWith<AppException> { other.lifecycle.start(planId, SurveyMode.ROBOT, "ws://203.0.113.7:9090") }
         assertTrue("203.0.113.7" in ws.message!!, ws.message)
+        // A plan made for a person is not driven by a robot.
+        val kind = assertFailsWith<AppException> { other.lifecycle.start(planId, SurveyMode.ROBOT) }
+        assertTrue("made for a person" in kind.message!!, kind.message)
         assertFalse(file.file.exists(), "a refused start records nothing")
+    }
+
+    @Test
+    fun aRobotSurveyDrivesOnAfterARestart() = runBlocking {
+        val db = File(dir, "robot.db")
+        val planId = planOn(db, robot = true)
+        val first = Process(db)
+        first.lifecycle.start(planId, SurveyMode.ROBOT)
+        first.await("running") { it.phase == SurveyPhase.RUNNING }
+        first.awaitLive("three poses") { it.track.size >= 3 }
+        first.scope.cancel()
+        val acked = first.lifecycle.controller!!.session.progress().walkedM
+        now.addAndGet(60_000) // the restart takes a while; the new robot's clock starts later
+
+        val second = Process(db)
+        assertEquals(SurveyMode.ROBOT, second.lifecycle.restore()!!.mode)
+        second.await("restored") { it.phase == SurveyPhase.RUNNING }
+        val start = second.lifecycle.controller!!.state.value.track.size
+        second.awaitLive("the robot drives again") { it.track.size >= start + 3 }
+        now.addAndGet(10_000)
+        val summary = second.lifecycle.stop()!!
+        assertEquals(SessionStatus.FINISHED, summary.status)
+        assertTrue(summary.walkedM > acked, "walked ${summary.walkedM} m after ${acked} m before the restart")
     }
 
     @Test

@@ -121,7 +121,8 @@ class SurveyLifecycle(
 
     /**
      * Starts a survey on [planId]. The surveyor model is the one the plan was made for
-     * (else the default of [mode]). Refused while another survey is active.
+     * (else the default of [mode]); a plan made for a person cannot be driven by a robot or
+     * the other way round. Refused while another survey is active.
      */
     suspend fun start(planId: Long, mode: SurveyMode, rosbridgeUrl: String? = null): ActiveSurvey = ops.withLock {
         val running = _state.value.active ?: activeFile.read()
@@ -131,7 +132,12 @@ class SurveyLifecycle(
         if (mode == SurveyMode.ROBOT && rosbridgeUrl != null) CleartextPolicy.check(rosbridgeUrl)?.let { throw AppException(it) }
         val plan = api.plan(planId)
         val map = api.map(plan.buildingId)
-        val profile: SurveyorProfile = plan.surveyor ?: if (mode == SurveyMode.HUMAN) defaultHumanProfile() else defaultRobotProfile()
+        val planned = plan.surveyor
+        if (planned != null && (planned is SurveyorProfile.Robot) != (mode == SurveyMode.ROBOT)) {
+            val kind = if (planned is SurveyorProfile.Robot) "a robot" else "a person"
+            throw AppException("plan $planId was made for $kind: plan again with the ${mode.name.lowercase()} profile to survey it in ${mode.name.lowercase()} mode")
+        }
+        val profile: SurveyorProfile = planned ?: if (mode == SurveyMode.HUMAN) defaultHumanProfile() else defaultRobotProfile()
         val s = api.startSession(planId, profile)
         val active = ActiveSurvey(s.id(), planId, mode, rosbridgeUrl, clock())
         try {

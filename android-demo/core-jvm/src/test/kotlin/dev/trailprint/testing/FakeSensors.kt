@@ -17,8 +17,11 @@ import kotlinx.coroutines.flow.onCompletion
 import kotlinx.coroutines.flow.onStart
 import kotlinx.coroutines.flow.receiveAsFlow
 
-/** Sensors the test drives by hand: it sends steps and completed scans, and counts requests. */
-class FakeSensors : SurveySensors {
+/**
+ * Sensors the test drives by hand: it sends steps and completed scans, and counts requests.
+ * The robot is the simulated one, its clock starting at [clock]'s time.
+ */
+class FakeSensors(private val clock: () -> Long = System::currentTimeMillis) : SurveySensors {
     val stepEvents = Channel<StepEvent>(Channel.UNLIMITED)
     val scanResults = Channel<WifiScan>(Channel.UNLIMITED)
     val scanRequests = AtomicInteger()
@@ -44,7 +47,7 @@ class FakeSensors : SurveySensors {
         }
     }
 
-    override fun robot(rosbridgeUrl: String?): RobotDriver = SimulatedRobot(SimulatedRobotConfig(speed = 2.0))
+    override fun robot(rosbridgeUrl: String?): RobotDriver = SimulatedRobot(SimulatedRobotConfig(speed = 2.0, startTimeMs = clock()))
 }
 
 /** A wake lock that records what was done to it and fails the test on a double acquire. */

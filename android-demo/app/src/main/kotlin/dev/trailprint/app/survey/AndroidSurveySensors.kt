@@ -32,5 +32,6 @@ class AndroidSurveySensors(private val context: Context) : SurveySensors {
 
     override fun robot(rosbridgeUrl: String?): RobotDriver =
         rosbridgeUrl?.let { RosbridgeRobotDriver(OkHttpWebSocketFactory(), RosbridgeConfig(url = it)) }
-            ?: SimulatedRobot(SimulatedRobotConfig(speed = 0.5))
+            // On the wall clock: a restarted survey's poses must not go back in time.
+            ?: SimulatedRobot(SimulatedRobotConfig(speed = 0.5, startTimeMs = System.currentTimeMillis()))
 }
