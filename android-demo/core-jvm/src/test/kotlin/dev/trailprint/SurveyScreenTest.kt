@@ -6,6 +6,11 @@ import dev.trailprint.ffi.Position
 import dev.trailprint.ffi.SessionStatus
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.survey.SurveyLive
+import dev.trailprint.files.ExportFiles
+import dev.trailprint.survey.ActiveSurveyFile
+import dev.trailprint.survey.SurveyLifecycle
+import dev.trailprint.survey.SurveyMode
+import dev.trailprint.testing.FakeSensors
 import dev.trailprint.testing.TestData
 import dev.trailprint.ui.FinishModel
 import dev.trailprint.ui.SurveyModel
@@ -18,8 +23,10 @@ import kotlin.test.assertEquals
 import kotlin.test.assertNotNull
 import kotlin.test.assertNull
 import kotlin.test.assertTrue
+import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
-import kotlinx.coroutines.cancelAndJoin
+import kotlinx.coroutines.SupervisorJob
+import kotlinx.coroutines.cancel
 import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
@@ -49,32 +56,54 @@ class SurveyScreenTest {
     }
 
     @Test
-    fun theSurveyModelStartsAChecksInAndFinishesAndTheFinishModelExports() = runBlocking {
+    fun theSurveyModelDrivesTheLifecycleAndTheFinishModelWritesFilesToShare() = runBlocking {
         Trailprint.open(File(dir, "ui.db").path, Dispatchers.IO).use { api ->
             val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
             val plan = api.store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
             var now = 1_700_000_000_000L
-            val model = SurveyModel(api, this, Dispatchers.IO, clock = { now })
-            val job = model.start(plan.id, defaultHumanProfile())
+            val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
+            val sensors = FakeSensors()
+            val lifecycle = SurveyLifecycle(api, ActiveSurveyFile(File(dir, "active.json")), sensors, scope, clock = { now })
+            val model = SurveyModel(lifecycle, scope)
+            lifecycle.start(plan.id, SurveyMode.HUMAN)
             val started = withTimeout(30_000) { model.state.first { it.sessionId != null && it.nextVertex != null } }
             assertEquals("c01", started.nextVertex)
             assertTrue(started.instruction.isNotBlank())
-            val c = model.controller!!
-            repeat(4) { now += 600; c.step() }
+            repeat(4) { now += 600; sensors.step() }
+            withTimeout(30_000) { model.state.first { it.walked.size >= 4 } }
             now += 1000
             model.checkInAt("c02").join()
             val after = withTimeout(30_000) { model.state.first { it.walked.size >= 5 } }
             assertTrue(after.fraction > 0.2, "${after.fraction}")
+            assertNotNull(after.awakeMessage)
+            model.pause().join()
+            assertTrue(withTimeout(30_000) { model.state.first { it.paused } }.paused)
+            model.pause().join() // pausing twice is the session's error, shown, not thrown
+            assertNotNull(withTimeout(30_000) { model.state.first { it.error != null } }.error)
+            model.dismissError()
+            model.resume().join()
             model.finish().join()
             val done = withTimeout(30_000) { model.state.first { it.finished != null } }
             assertEquals(SessionStatus.FINISHED, done.finished!!.status)
-            job.cancelAndJoin()
-            val finish = FinishModel(api, this, Dispatchers.IO)
+            model.close()
+            // A screen opened later on the same service does not take that end for its own.
+            val later = SurveyModel(lifecycle, scope)
+            assertEquals(done.sessionId, withTimeout(30_000) { later.state.first { it.map != null } }.sessionId)
+            assertNull(later.state.value.finished)
+            assertTrue(!later.hasActiveSurvey)
+            scope.cancel()
+
+            val exports = ExportFiles(File(dir, "exports"), api)
+            val finish = FinishModel(api, exports, this, Dispatchers.IO)
             finish.load(done.sessionId!!).join()
-            val f = finish.state.value
-            assertNull(f.error)
-            assertNotNull(f.exportCsv)
-            assertTrue(f.lines().first().startsWith("Walked"), f.lines().toString())
+            assertNull(finish.state.value.error)
+            assertTrue(finish.state.value.lines().first().startsWith("Walked"), finish.state.value.lines().toString())
+            finish.shareCsv().join()
+            val csv = finish.state.value.share!!
+            assertEquals("text/csv", csv.mimeType)
+            assertTrue(csv.file.isFile && csv.file.parentFile == exports.dir, "${csv.file}")
+            finish.shared()
+            assertNull(finish.state.value.share)
         }
     }
 }

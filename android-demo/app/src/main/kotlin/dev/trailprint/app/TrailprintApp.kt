@@ -1,18 +1,45 @@
 package dev.trailprint.app
 
 import android.app.Application
+import android.os.Build
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.TrailprintStore
+import dev.trailprint.files.ExportFiles
+import dev.trailprint.survey.ActiveSurveyFile
 import java.io.File
+import kotlinx.coroutines.flow.MutableStateFlow
 
-/** Holds the one [Trailprint] of the app (one database file, shared by every screen). */
+/** A file another app handed to Trailprint (share sheet, "open with"): its name and text. */
+data class IncomingFile(val name: String, val text: String)
+
+/**
+ * Holds what the whole app shares: the one [Trailprint] (one database file), the record
+ * of the active survey next to it, the export folder the FileProvider serves, and files
+ * received from other apps until a screen takes them.
+ */
 class TrailprintApp : Application() {
     val api: Trailprint by lazy {
         Trailprint(TrailprintStore.open(File(filesDir, "trailprint.db").path))
     }
 
-    /** Robot mode: a rosbridge WebSocket URL (`ws://robot:9090`), or null for the simulated robot. */
+    val activeSurvey: ActiveSurveyFile by lazy { ActiveSurveyFile(File(filesDir, "active-survey.json")) }
+
+    /** Exports go to cache/exports (res/xml/file_paths.xml), shared as content URIs. */
+    val exports: ExportFiles by lazy { ExportFiles(File(cacheDir, "exports"), api) }
+
+    /** This phone's name in the bundles it exports. */
+    val deviceName: String get() = "${Build.MANUFACTURER} ${Build.MODEL}"
+
+    /** The surveyor's name for bundles, remembered between surveys. */
+    var surveyorName: String?
+        get() = getSharedPreferences("trailprint", MODE_PRIVATE).getString("surveyor", null)
+        set(v) = getSharedPreferences("trailprint", MODE_PRIVATE).edit().putString("surveyor", v).apply()
+
+    /** Robot mode: a rosbridge WebSocket URL (`ws://robot.local:9090`), or null for the simulated robot. */
     @Volatile var rosbridgeUrl: String? = null
+
+    /** Files shared to the app, waiting for the team or walk screen. */
+    val incoming = MutableStateFlow<List<IncomingFile>>(emptyList())
 
     /** The demo building shipped in the assets (android-demo/demo/demo-building.json). */
     fun demoBuildingJson(): String = assets.open("demo-building.json").bufferedReader().use { it.readText() }

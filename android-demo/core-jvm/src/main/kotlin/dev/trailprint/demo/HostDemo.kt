@@ -28,6 +28,9 @@ data class DemoSurveyResult(
     val offRouteCheckIns: Int,
     val replans: Int,
     val csvLines: Int,
+    /** Wall-clock time the controller took per step and per scan event, ms (human survey). */
+    val stepHandlingMs: Double = 0.0,
+    val scanHandlingMs: Double = 0.0,
 )
 
 /**
@@ -76,12 +79,18 @@ class DemoScenarios(private val api: Trailprint, private val log: (String) -> Un
         var offRoute = 0
         var current = plan.walk.first()
         var legs = 0
+        // What each event costs to handle (the CPU time a wake lock covers on a phone).
+        var stepNs = 0L
+        var steps = 0
+        var scanNs = 0L
+        var scans = 0
         suspend fun walk(target: String) {
             val p = pos.getValue(target)
             for (ev in walker.walkTo(p.x, p.y, p.floor)) {
+                val t0 = System.nanoTime()
                 when (ev) {
-                    is WalkEvent.Step -> c.step(ev.tMs)
-                    is WalkEvent.Scan -> c.scan(ev.scan)
+                    is WalkEvent.Step -> c.step(ev.tMs).also { stepNs += System.nanoTime() - t0; steps++ }
+                    is WalkEvent.Scan -> c.scan(ev.scan).also { scanNs += System.nanoTime() - t0; scans++ }
                 }
             }
             current = target
@@ -125,7 +134,10 @@ class DemoScenarios(private val api: Trailprint, private val log: (String) -> Un
         scope.coroutineContext[kotlinx.coroutines.Job]?.cancel()
         val id = session.id()
         session.close()
-        return DemoSurveyResult(id, summary, offRoute, summary.replans.toInt(), csv.lines().count { it.isNotBlank() })
+        val stepMs = if (steps > 0) stepNs / 1e6 / steps else 0.0
+        val scanMs = if (scans > 0) scanNs / 1e6 / scans else 0.0
+        log("  event handling on this host: %d steps, %.2f ms each; %d scans, %.2f ms each".format(steps, stepMs, scans, scanMs))
+        return DemoSurveyResult(id, summary, offRoute, summary.replans.toInt(), csv.lines().count { it.isNotBlank() }, stepMs, scanMs)
     }
 
     /** The simulated robot drives [plan], scanning every second of simulated time. */

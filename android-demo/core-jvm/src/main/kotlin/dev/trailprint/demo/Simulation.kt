@@ -8,9 +8,9 @@ import java.util.Random
 import kotlin.math.hypot
 import kotlin.math.log10
 import kotlin.math.roundToInt
-import kotlinx.coroutines.delay
+import kotlinx.coroutines.channels.Channel
 import kotlinx.coroutines.flow.Flow
-import kotlinx.coroutines.flow.flow
+import kotlinx.coroutines.flow.receiveAsFlow
 
 /**
  * Simulated Wi-Fi for the host demo and tests: access points at every [every]-th vertex
@@ -36,14 +36,18 @@ class SimulatedWifi(map: BuildingMap, seed: Long = 1, every: Int = 8, private va
         return WifiScan(tMs, readings)
     }
 
-    /** A [WifiScanSource] that scans wherever [where] says the device is, every interval. */
+    /**
+     * A [WifiScanSource] that completes each requested scan at once, wherever [where] says
+     * the device is, stamped with [clock].
+     */
     fun source(clock: () -> Long, where: () -> Triple<Double, Double, Long>): WifiScanSource = object : WifiScanSource {
-        override fun scans(requestIntervalMs: Long): Flow<WifiScan> = flow {
-            while (true) {
-                delay(requestIntervalMs)
-                val (x, y, f) = where()
-                emit(scanAt(clock(), x, y, f))
-            }
+        private val completed = Channel<WifiScan>(Channel.UNLIMITED)
+
+        override fun results(): Flow<WifiScan> = completed.receiveAsFlow()
+
+        override fun requestScan(): Boolean {
+            val (x, y, f) = where()
+            return completed.trySend(scanAt(clock(), x, y, f)).isSuccess
         }
     }
 }

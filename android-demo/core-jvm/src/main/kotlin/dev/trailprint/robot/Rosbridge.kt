@@ -48,7 +48,7 @@ enum class GoalMode {
  * a rotation [mapYaw] then a shift ([mapX], [mapY]): `map = R(yaw) * building + shift`.
  */
 data class RosbridgeConfig(
-    val url: String = "ws://192.168.1.10:9090",
+    val url: String = "ws://robot.local:9090",
     val goalMode: GoalMode = GoalMode.NAV2_ACTION,
     val actionName: String = "/navigate_to_pose",
     val actionType: String = "nav2_msgs/action/NavigateToPose",

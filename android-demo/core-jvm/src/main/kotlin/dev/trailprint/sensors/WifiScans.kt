@@ -14,10 +14,37 @@ data class WifiScan(val timestampMs: Long, val readings: List<WifiReading>)
  * `SCAN_RESULTS_AVAILABLE_ACTION` broadcast. Android 9+ throttles foreground apps to 4
  * scans in 2 minutes unless "Wi-Fi scan throttling" is turned off in the developer
  * options; measure the real interval with [ScanIntervalStats] and tell the surveyor.
+ *
+ * Requesting and receiving are separate so that the survey asks for a scan while it is
+ * awake anyway (handling a step or a robot pose, see [ScanPacer]) instead of running a
+ * timer that would need the CPU kept awake for the whole survey.
  */
 interface WifiScanSource {
-    /** Scans as they complete, requesting a new one every [requestIntervalMs]. */
-    fun scans(requestIntervalMs: Long): Flow<WifiScan>
+    /** Scans as they complete; collecting registers for the results, cancelling unregisters. */
+    fun results(): Flow<WifiScan>
+
+    /** Asks for a scan now; false when the system refused (throttled, Wi-Fi off). */
+    fun requestScan(): Boolean
+}
+
+/**
+ * When to ask for the next Wi-Fi scan: at most one request per [intervalMs], decided each
+ * time the survey handles a sensor event (a step, a robot pose) or its fallback timer
+ * fires. Pure and clock-free: the caller passes the time.
+ */
+class ScanPacer(val intervalMs: Long) {
+    init {
+        require(intervalMs > 0) { "scan interval must be positive, got $intervalMs ms" }
+    }
+
+    private var lastRequestMs = Long.MIN_VALUE
+
+    /** True (and the request counted as made at [nowMs]) when a scan is due. */
+    fun due(nowMs: Long): Boolean {
+        if (lastRequestMs != Long.MIN_VALUE && nowMs - lastRequestMs < intervalMs) return false
+        lastRequestMs = nowMs
+        return true
+    }
 }
 
 /** What [ScanIntervalStats] measured. Times in seconds. */

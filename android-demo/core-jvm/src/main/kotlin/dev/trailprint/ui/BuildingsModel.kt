@@ -41,6 +41,9 @@ class BuildingsModel(private val api: Trailprint, private val scope: CoroutineSc
 
     fun dismissError() = _state.update { it.copy(error = null) }
 
+    /** Shows an error from outside the store (a file that could not be read). */
+    fun reportError(message: String) = _state.update { it.copy(error = message) }
+
     private fun launchBusy(block: suspend () -> Unit) = scope.launch {
         _state.update { it.copy(busy = true, error = null) }
         try {

@@ -1,6 +1,9 @@
 package dev.trailprint.ui
 
+import dev.trailprint.AppException
 import dev.trailprint.Trailprint
+import dev.trailprint.files.ExportFiles
+import dev.trailprint.files.ShareableFile
 import dev.trailprint.ffi.SessionSummary
 import dev.trailprint.ffi.TrailprintException
 import kotlinx.coroutines.CoroutineDispatcher
@@ -15,9 +18,11 @@ import kotlinx.coroutines.withContext
 
 data class FinishState(
     val summary: SessionSummary? = null,
-    /** The collected fingerprints, ready to share. */
-    val exportJson: String? = null,
-    val exportCsv: String? = null,
+    val buildingId: Long? = null,
+    /** A file being written for sharing. */
+    val busy: Boolean = false,
+    /** The file to share now (the screen starts the share sheet and calls [FinishModel.shared]). */
+    val share: ShareableFile? = null,
     val error: String? = null,
 ) {
     /** The lines of the summary card. */
@@ -32,24 +37,59 @@ data class FinishState(
     } ?: emptyList()
 }
 
-/** State of the finish screen: the summary and the exports of a session. */
+/**
+ * State of the finish screen: the summary of a session, and its data as files to share —
+ * the fingerprints as CSV or JSON, and the building's survey bundle for the team's
+ * coordinator. Files are written on demand by [exports], never held as text in the state.
+ */
 class FinishModel(
     private val api: Trailprint,
+    private val exports: ExportFiles,
     private val scope: CoroutineScope,
     private val io: CoroutineDispatcher = Dispatchers.IO,
 ) {
     private val _state = MutableStateFlow(FinishState())
     val state: StateFlow<FinishState> = _state.asStateFlow()
+    private var sessionId: Long? = null
 
     fun load(sessionId: Long) = scope.launch {
+        this@FinishModel.sessionId = sessionId
         try {
             val session = api.resumeSession(sessionId)
-            val (summary, json, csv) = withContext(io) {
-                session.use { Triple(it.summary(), it.exportJson(), it.exportCsv()) }
-            }
-            _state.update { it.copy(summary = summary, exportJson = json, exportCsv = csv) }
+            val (summary, bid) = withContext(io) { session.use { it.summary() to it.buildingId() } }
+            _state.update { it.copy(summary = summary, buildingId = bid) }
         } catch (e: TrailprintException) {
             _state.update { it.copy(error = e.message) }
+        }
+    }
+
+    fun shareCsv() = export { exports.sessionCsv(it) }
+
+    fun shareJson() = export { exports.sessionJson(it) }
+
+    /** The bundle of the survey's building, named after this [device] and [surveyorName]. */
+    fun shareBundle(device: String?, surveyorName: String?) = export {
+        val bid = _state.value.buildingId ?: throw AppException("the session is not loaded yet")
+        exports.bundle(bid, device, surveyorName?.trim()?.ifEmpty { null })
+    }
+
+    /** The share sheet was shown. */
+    fun shared() = _state.update { it.copy(share = null) }
+
+    fun dismissError() = _state.update { it.copy(error = null) }
+
+    private fun export(make: suspend (Long) -> ShareableFile) = scope.launch {
+        val sid = sessionId ?: return@launch
+        _state.update { it.copy(busy = true, error = null) }
+        try {
+            val f = make(sid)
+            _state.update { it.copy(share = f) }
+        } catch (e: TrailprintException) {
+            _state.update { it.copy(error = e.message) }
+        } catch (e: AppException) {
+            _state.update { it.copy(error = e.message) }
+        } finally {
+            _state.update { it.copy(busy = false) }
         }
     }
 }

@@ -1,19 +1,17 @@
 package dev.trailprint.ui
 
-import dev.trailprint.Trailprint
 import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.PlanSummary
 import dev.trailprint.ffi.SessionStatus
 import dev.trailprint.ffi.SessionSummary
-import dev.trailprint.ffi.SurveyorProfile
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.Turn
 import dev.trailprint.geometry.WorldPoint
-import dev.trailprint.survey.SurveyController
+import dev.trailprint.AppException
+import dev.trailprint.survey.LifecycleState
+import dev.trailprint.survey.SurveyLifecycle
 import dev.trailprint.survey.SurveyLive
-import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.CoroutineScope
-import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
 import kotlinx.coroutines.flow.asStateFlow
@@ -44,6 +42,10 @@ data class SurveyUiState(
     val collectedNats: Double = 0.0,
     val plannedNats: Double = 0.0,
     val scanMessage: String? = null,
+    /** What the survey costs in CPU time so far (see `AwakeMeter`). */
+    val awakeMessage: String? = null,
+    /** A note from the survey's lifecycle (carried on after a restart, a robot error). */
+    val notice: String? = null,
     val finished: SessionSummary? = null,
     val busy: Boolean = false,
     val error: String? = null,
@@ -77,6 +79,7 @@ data class SurveyUiState(
                 collectedNats = p?.collectedUtilityNats ?: 0.0,
                 plannedNats = p?.plannedUtilityNats ?: 0.0,
                 scanMessage = live.scans?.message(),
+                awakeMessage = live.awake?.message(),
                 finished = live.summary,
                 error = live.error,
             )
@@ -85,72 +88,88 @@ data class SurveyUiState(
 }
 
 /**
- * State of the survey screen: starts (or resumes) the session, owns its
- * [SurveyController], and maps the controller's state to [SurveyUiState]. The Android
- * ViewModel attaches the sensors (or a robot) to [controller].
+ * State of the survey screen over the survey's [SurveyLifecycle], which the foreground
+ * service owns: the screen binds to the service, draws [state] and sends the surveyor's
+ * taps. Closing the screen does not stop the survey.
  */
-class SurveyModel(
-    private val api: Trailprint,
-    private val scope: CoroutineScope,
-    private val io: CoroutineDispatcher = Dispatchers.IO,
-    private val clock: () -> Long = System::currentTimeMillis,
-) {
+class SurveyModel(private val lifecycle: SurveyLifecycle, private val scope: CoroutineScope) {
     private val _state = MutableStateFlow(SurveyUiState())
     val state: StateFlow<SurveyUiState> = _state.asStateFlow()
+    private val lock = Any()
+    private var error: String? = null
+    private var busy = false
+    /** The session this screen saw running: only its end is this screen's [SurveyUiState.finished]. */
+    private var seen: Long? = null
 
-    var controller: SurveyController? = null
-        private set
+    /** True while a survey runs (the screen shows it instead of starting another). */
+    val hasActiveSurvey: Boolean get() = lifecycle.state.value.active != null
 
-    /** Starts a session on [planId] for [surveyor] (or resumes [resumeSessionId]). */
-    fun start(
-        planId: Long,
-        surveyor: SurveyorProfile,
-        resumeSessionId: Long? = null,
-        onReady: suspend (SurveyController, BuildingMap) -> Unit = { _, _ -> },
-    ) = scope.launch {
+    // Every change of the lifecycle redraws from its latest state.
+    private val watcher = scope.launch { lifecycle.state.collect { publish() } }
+
+    /** Stops drawing (the screen is gone); operations already started run to their end. */
+    fun close() = watcher.cancel()
+
+    /**
+     * Recomputes the screen from the lifecycle's *current* state (read and written under
+     * one lock, so that a slower caller never overwrites a newer state with an older one).
+     */
+    private fun publish() = synchronized(lock) {
+        val ls = lifecycle.state.value
+        ls.active?.let { seen = it.sessionId }
+        val map = ls.map
+        val ui = if (map == null) SurveyUiState() else SurveyUiState.of(map, ls.plan, ls.active?.sessionId ?: ls.summary?.sessionId, ls.live, ls.ahead)
+        _state.value = ui.copy(
+            notice = ls.message,
+            finished = (ls.summary ?: ui.finished)?.takeIf { it.sessionId == seen },
+            busy = busy,
+            error = error ?: ui.error,
+        )
+    }
+
+    fun checkIn() = act { lifecycle.controller?.checkInAtNext() }
+
+    fun checkInAt(vertex: String) = act { lifecycle.controller?.checkIn(vertex) }
+
+    fun pause() = act { lifecycle.pause() }
+
+    fun resume() = act { lifecycle.resume() }
+
+    fun replan() = act {
+        synchronized(lock) { busy = true }
+        publish()
         try {
-            val plan = api.plan(planId)
-            val map = api.map(plan.buildingId)
-            val session = if (resumeSessionId != null) api.resumeSession(resumeSessionId) else api.startSession(planId, surveyor)
-            val c = SurveyController(session, scope, io, clock)
-            controller = c
-            c.refresh()
-            onReady(c, map)
-            val sid = session.id()
-            c.state.collect { live ->
-                val ahead = try {
-                    session.routeAhead().map { it.vertex }
-                } catch (e: Exception) {
-                    emptyList()
-                }
-                _state.value = SurveyUiState.of(map, plan, sid, live, ahead)
-            }
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
+            lifecycle.controller?.replan()
+        } finally {
+            synchronized(lock) { busy = false }
         }
     }
 
-    fun checkIn() = scope.launch { controller?.checkInAtNext() }
+    fun finish() = act { lifecycle.stop() }
 
-    fun checkInAt(vertex: String) = scope.launch { controller?.checkIn(vertex) }
+    fun abort(reason: String? = null) = act { lifecycle.abort(reason) }
 
-    fun pause() = scope.launch { controller?.pause() }
-
-    fun resume() = scope.launch { controller?.resume() }
-
-    fun replan() = scope.launch {
-        _state.update { it.copy(busy = true) }
-        controller?.replan()
-        _state.update { it.copy(busy = false) }
+    /** Shows an error from outside the survey. */
+    fun reportError(message: String) {
+        synchronized(lock) { error = message }
+        publish()
     }
 
-    fun finish() = scope.launch { controller?.finish() }
-
-    /** Shows an error from outside the session (for example the robot link). */
-    fun reportError(message: String) = _state.update { it.copy(error = message) }
-
     fun dismissError() {
-        controller?.dismissError()
-        _state.update { it.copy(error = null) }
+        synchronized(lock) { error = null }
+        lifecycle.controller?.dismissError()
+        lifecycle.dismissMessage()
+        publish()
+    }
+
+    private fun act(block: suspend () -> Unit) = scope.launch {
+        try {
+            block()
+        } catch (e: AppException) {
+            synchronized(lock) { error = e.message }
+        } catch (e: TrailprintException) {
+            synchronized(lock) { error = e.message }
+        }
+        publish()
     }
 }

@@ -5,6 +5,7 @@ import android.hardware.Sensor
 import android.hardware.SensorEvent
 import android.hardware.SensorEventListener
 import android.hardware.SensorManager
+import android.os.PowerManager
 import dev.trailprint.sensors.PeakStepDetector
 import dev.trailprint.sensors.StepEvent
 import dev.trailprint.sensors.StepSource
@@ -13,17 +14,21 @@ import kotlinx.coroutines.flow.Flow
 import kotlinx.coroutines.flow.callbackFlow
 
 /**
- * Steps from `TYPE_STEP_DETECTOR` when the phone has one, else from the accelerometer
- * through the Android-free [PeakStepDetector]. Glue only: no logic of its own.
+ * Steps from `TYPE_STEP_DETECTOR` — its wake-up variant where the phone has one, so that a
+ * step wakes the CPU in a pocket — when [useStepDetector] (ACTIVITY_RECOGNITION granted);
+ * else from the accelerometer through the Android-free [PeakStepDetector]. The
+ * accelerometer needs every sample, so that fallback keeps the CPU awake (its own partial
+ * wake lock) for as long as steps are collected. Glue only: no logic of its own.
  */
-class AndroidStepSource(context: Context) : StepSource {
+class AndroidStepSource(private val context: Context, private val useStepDetector: Boolean) : StepSource {
     private val sensors = context.getSystemService(Context.SENSOR_SERVICE) as SensorManager
 
-    /** True when the hardware step detector is used. */
-    val usesStepDetector: Boolean = sensors.getDefaultSensor(Sensor.TYPE_STEP_DETECTOR) != null
-
     override fun steps(): Flow<StepEvent> = callbackFlow {
-        val detector = sensors.getDefaultSensor(Sensor.TYPE_STEP_DETECTOR)
+        val detector = if (useStepDetector) {
+            sensors.getDefaultSensor(Sensor.TYPE_STEP_DETECTOR, true) ?: sensors.getDefaultSensor(Sensor.TYPE_STEP_DETECTOR)
+        } else {
+            null
+        }
         val peaks = PeakStepDetector()
         val listener = object : SensorEventListener {
             override fun onSensorChanged(e: SensorEvent) {
@@ -42,7 +47,17 @@ class AndroidStepSource(context: Context) : StepSource {
             close(IllegalStateException("this phone has neither a step detector nor an accelerometer"))
             return@callbackFlow
         }
+        val awake = if (detector == null) {
+            (context.getSystemService(Context.POWER_SERVICE) as PowerManager)
+                .newWakeLock(PowerManager.PARTIAL_WAKE_LOCK, "trailprint:accelerometer-steps")
+                .apply { setReferenceCounted(false); acquire(4 * 60 * 60 * 1000L) }
+        } else {
+            null
+        }
         sensors.registerListener(listener, sensor, SensorManager.SENSOR_DELAY_GAME)
-        awaitClose { sensors.unregisterListener(listener) }
+        awaitClose {
+            sensors.unregisterListener(listener)
+            if (awake?.isHeld == true) awake.release()
+        }
     }
 }

@@ -28,7 +28,10 @@ import androidx.lifecycle.AndroidViewModel
 import androidx.lifecycle.compose.collectAsStateWithLifecycle
 import androidx.lifecycle.viewModelScope
 import androidx.lifecycle.viewmodel.compose.viewModel
+import androidx.compose.ui.platform.LocalContext
+import dev.trailprint.app.IncomingFile
 import dev.trailprint.app.TrailprintApp
+import dev.trailprint.app.readDocument
 import dev.trailprint.ui.BuildingsModel
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.launch
@@ -59,17 +62,35 @@ class BuildingsViewModel(app: Application) : AndroidViewModel(app) {
         }
         model.import(json, name)
     }
+
+    /** Reads a picked document for another screen. */
+    fun receive(uri: Uri, then: (IncomingFile) -> Unit) = viewModelScope.launch {
+        try {
+            then(withContext(Dispatchers.IO) { getApplication<Application>().readDocument(uri) })
+        } catch (e: java.io.IOException) {
+            model.reportError("Cannot read the file: ${e.message}")
+        }
+    }
 }
 
 @Composable
-fun BuildingsScreen(onOpen: (Long) -> Unit, vm: BuildingsViewModel = viewModel()) {
+fun BuildingsScreen(onOpen: (Long) -> Unit, onTeam: () -> Unit, onWalkFile: () -> Unit, vm: BuildingsViewModel = viewModel()) {
     val state by vm.model.state.collectAsStateWithLifecycle()
+    val context = LocalContext.current
     val picker = rememberLauncherForActivityResult(ActivityResultContracts.OpenDocument()) { uri -> uri?.let(vm::importUri) }
+    // A walk file from the coordinator: read it and hand it to the walk screen.
+    val walkPicker = rememberLauncherForActivityResult(ActivityResultContracts.OpenDocument()) { uri ->
+        uri?.let { vm.receive(it) { f -> (context.applicationContext as TrailprintApp).incoming.value = listOf(f); onWalkFile() } }
+    }
     Column(Modifier.fillMaxSize().padding(16.dp), verticalArrangement = Arrangement.spacedBy(12.dp)) {
         Text("Buildings", style = androidx.compose.material3.MaterialTheme.typography.headlineMedium)
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
             Button(onClick = { picker.launch(arrayOf("application/json", "*/*")) }) { Text("Import file") }
             OutlinedButton(onClick = { vm.importDemo() }) { Text("Load demo building") }
+        }
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
+            OutlinedButton(onClick = { walkPicker.launch(arrayOf("application/json", "*/*")) }) { Text("Open a walk file") }
+            OutlinedButton(onClick = onTeam) { Text("Coordinate a team") }
         }
         if (state.busy) LinearProgressIndicator(Modifier.fillMaxWidth())
         LazyColumn(verticalArrangement = Arrangement.spacedBy(8.dp)) {

@@ -1,7 +1,15 @@
 package dev.trailprint.app.ui
 
-import android.Manifest
 import android.app.Application
+import android.content.ComponentName
+import android.content.Context
+import android.content.Intent
+import android.content.ServiceConnection
+import android.content.pm.PackageManager
+import android.net.Uri
+import android.os.Build
+import android.os.IBinder
+import android.provider.Settings
 import androidx.activity.compose.rememberLauncherForActivityResult
 import androidx.activity.result.contract.ActivityResultContracts
 import androidx.compose.foundation.layout.Arrangement
@@ -19,79 +27,60 @@ import androidx.compose.material3.OutlinedButton
 import androidx.compose.material3.Text
 import androidx.compose.material3.TextButton
 import androidx.compose.runtime.Composable
+import androidx.compose.runtime.DisposableEffect
 import androidx.compose.runtime.LaunchedEffect
 import androidx.compose.runtime.getValue
+import androidx.compose.runtime.mutableStateOf
+import androidx.compose.runtime.remember
+import androidx.compose.runtime.setValue
 import androidx.compose.ui.Modifier
+import androidx.compose.ui.platform.LocalContext
 import androidx.compose.ui.unit.dp
 import androidx.compose.ui.unit.sp
+import androidx.core.content.ContextCompat
 import androidx.lifecycle.AndroidViewModel
-import androidx.lifecycle.ViewModelProvider.AndroidViewModelFactory.Companion.APPLICATION_KEY
 import androidx.lifecycle.compose.collectAsStateWithLifecycle
 import androidx.lifecycle.viewModelScope
 import androidx.lifecycle.viewmodel.compose.viewModel
-import androidx.lifecycle.viewmodel.initializer
-import androidx.lifecycle.viewmodel.viewModelFactory
-import dev.trailprint.app.TrailprintApp
-import dev.trailprint.app.sensors.AndroidStepSource
-import dev.trailprint.app.sensors.AndroidWifiScanSource
-import dev.trailprint.app.sensors.OkHttpWebSocketFactory
-import dev.trailprint.ffi.Position
+import dev.trailprint.app.survey.SurveyService
 import dev.trailprint.ffi.Turn
-import dev.trailprint.ffi.defaultHumanProfile
-import dev.trailprint.ffi.defaultRobotProfile
-import dev.trailprint.robot.RobotDriver
-import dev.trailprint.robot.RobotException
-import dev.trailprint.robot.RosbridgeConfig
-import dev.trailprint.robot.RosbridgeRobotDriver
-import dev.trailprint.robot.SimulatedRobot
-import dev.trailprint.robot.SimulatedRobotConfig
+import dev.trailprint.permissions.AppPermission
+import dev.trailprint.permissions.PermissionOutcome
+import dev.trailprint.permissions.SurveyPermissions
+import dev.trailprint.survey.SurveyLifecycle
+import dev.trailprint.survey.SurveyMode
 import dev.trailprint.ui.SurveyModel
-import kotlinx.coroutines.launch
+import kotlinx.coroutines.flow.MutableStateFlow
 
 /**
- * The survey screen's ViewModel: the Android-free [SurveyModel] on viewModelScope, plus the
- * sensor glue — the phone's steps and Wi-Fi scans for a person, or a robot driver (the
- * simulated robot, or a ROS 2 robot through rosbridge when [rosbridgeUrl] is given) and the
- * phone's Wi-Fi scans for a robot.
+ * The survey screen's ViewModel: binds to [SurveyService], which owns the survey, and
+ * exposes its lifecycle; each visit of the screen draws it through a fresh Android-free
+ * [SurveyModel]. Unbinding does not stop the survey: the service runs on.
  */
-class SurveyViewModel(app: Application, private val planId: Long, private val robot: Boolean, private val rosbridgeUrl: String?) : AndroidViewModel(app) {
-    val model = SurveyModel((app as TrailprintApp).api, viewModelScope)
-    private val wifi = AndroidWifiScanSource(app)
-    private var driver: RobotDriver? = null
+class SurveyViewModel(app: Application) : AndroidViewModel(app) {
+    val lifecycle = MutableStateFlow<SurveyLifecycle?>(null)
+    private val connection = object : ServiceConnection {
+        override fun onServiceConnected(name: ComponentName, binder: IBinder) {
+            lifecycle.value = (binder as SurveyService.LocalBinder).service.lifecycle
+        }
 
-    fun start() {
-        val profile = if (robot) defaultRobotProfile() else defaultHumanProfile()
-        model.start(planId, profile) { controller, map ->
-            if (robot) startRobot(controller, map) else controller.attachHumanSensors(AndroidStepSource(getApplication()), wifi)
+        override fun onServiceDisconnected(name: ComponentName) {
+            lifecycle.value = null
         }
     }
 
-    private fun startRobot(controller: dev.trailprint.survey.SurveyController, map: dev.trailprint.ffi.BuildingMap) {
-        val d = rosbridgeUrl?.let { RosbridgeRobotDriver(OkHttpWebSocketFactory(), RosbridgeConfig(url = it)) }
-            ?: SimulatedRobot(SimulatedRobotConfig(speed = 0.5))
-        driver = d
-        controller.attachRobot(d, wifi)
-        val pos = map.vertices.associate { it.id to Position(it.x, it.y, it.floor) }
-        viewModelScope.launch {
-            try {
-                d.follow(controller.waypointsAhead(pos))
-            } catch (e: RobotException) {
-                model.reportError("Robot: ${e.message}")
-            }
-        }
+    init {
+        app.bindService(Intent(app, SurveyService::class.java), connection, Context.BIND_AUTO_CREATE)
     }
 
-    override fun onCleared() {
-        driver?.close()
-        model.controller?.stopSensors()
-    }
+    fun start(planId: Long, mode: SurveyMode, rosbridgeUrl: String?) = SurveyService.start(getApplication(), planId, mode, rosbridgeUrl)
 
-    companion object {
-        fun factory(planId: Long, robot: Boolean, rosbridgeUrl: String?) = viewModelFactory {
-            initializer { SurveyViewModel(this[APPLICATION_KEY]!!, planId, robot, rosbridgeUrl) }
-        }
-    }
+    override fun onCleared() = getApplication<Application>().unbindService(connection)
 }
+
+/** The permissions granted now, by manifest name. */
+private fun granted(context: Context): Set<String> = AppPermission.entries.map { it.manifestName }
+    .filter { ContextCompat.checkSelfPermission(context, it) == PackageManager.PERMISSION_GRANTED }.toSet()
 
 private fun arrow(t: Turn?): String = when (t) {
     Turn.LEFT -> "⬅"
@@ -104,17 +93,60 @@ private fun arrow(t: Turn?): String = when (t) {
 
 @Composable
 fun SurveyScreen(
-    planId: Long,
+    planId: Long?,
     robot: Boolean,
     onFinished: (Long) -> Unit,
     rosbridgeUrl: String? = null,
-    vm: SurveyViewModel = viewModel(key = "survey-$planId", factory = SurveyViewModel.factory(planId, robot, rosbridgeUrl)),
+    vm: SurveyViewModel = viewModel(),
 ) {
-    val s by vm.model.state.collectAsStateWithLifecycle()
-    val permissions = rememberLauncherForActivityResult(ActivityResultContracts.RequestMultiplePermissions()) { vm.start() }
-    LaunchedEffect(planId) {
-        permissions.launch(arrayOf(Manifest.permission.ACCESS_FINE_LOCATION, Manifest.permission.ACTIVITY_RECOGNITION))
+    val context = LocalContext.current
+    val mode = if (robot) SurveyMode.ROBOT else SurveyMode.HUMAN
+    val lifecycle by vm.lifecycle.collectAsStateWithLifecycle()
+    // A fresh model per visit, so the end of an earlier survey is not taken for this one's.
+    val bound = remember(lifecycle, planId) { lifecycle?.let { SurveyModel(it, vm.viewModelScope) } }
+    DisposableEffect(bound) { onDispose { bound?.close() } }
+    var outcome by remember { mutableStateOf<PermissionOutcome?>(null) }
+    var asking by remember { mutableStateOf(emptyList<AppPermission>()) }
+    fun begin() {
+        val o = SurveyPermissions.outcome(mode, Build.VERSION.SDK_INT, granted(context))
+        outcome = o
+        if (o.canStart && planId != null) vm.start(planId, mode, rosbridgeUrl)
     }
+    val permissions = rememberLauncherForActivityResult(ActivityResultContracts.RequestMultiplePermissions()) { begin() }
+    // Asked when the survey starts, each with its reason; a survey already running needs no start.
+    LaunchedEffect(planId, bound) {
+        val m = bound ?: return@LaunchedEffect
+        if (planId == null || m.hasActiveSurvey) return@LaunchedEffect
+        asking = SurveyPermissions.toAsk(mode, Build.VERSION.SDK_INT, granted(context))
+        if (asking.isEmpty()) begin()
+    }
+    if (asking.isNotEmpty()) {
+        AlertDialog(
+            onDismissRequest = {},
+            confirmButton = { TextButton(onClick = { permissions.launch(asking.map { it.manifestName }.toTypedArray()); asking = emptyList() }) { Text("Continue") } },
+            title = { Text("Before the survey starts") },
+            text = { Text(asking.joinToString("\n\n") { it.reason }) },
+        )
+    }
+    outcome?.blocker?.let { msg ->
+        AlertDialog(
+            onDismissRequest = { outcome = null },
+            confirmButton = {
+                TextButton(onClick = {
+                    context.startActivity(Intent(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, Uri.fromParts("package", context.packageName, null)))
+                }) { Text("Open settings") }
+            },
+            dismissButton = { TextButton(onClick = { outcome = null }) { Text("Not now") } },
+            title = { Text("Cannot survey") },
+            text = { Text(msg) },
+        )
+    }
+    val m = bound
+    if (m == null) {
+        Text("Connecting to the survey…", Modifier.padding(16.dp))
+        return
+    }
+    val s by m.state.collectAsStateWithLifecycle()
     LaunchedEffect(s.finished) { s.finished?.let { onFinished(it.sessionId) } }
     Column(Modifier.fillMaxSize().padding(12.dp), verticalArrangement = Arrangement.spacedBy(8.dp)) {
         Row(horizontalArrangement = Arrangement.spacedBy(12.dp)) {
@@ -130,29 +162,31 @@ fun SurveyScreen(
                 map,
                 MapOverlay(planned = s.planned, walked = s.walked, estimate = s.estimate, next = s.next),
                 Modifier.fillMaxWidth().weight(1f),
-                onVertexTap = vm.model::checkInAt,
+                onVertexTap = m::checkInAt,
             )
         }
         LinearProgressIndicator(progress = { s.fraction.toFloat() }, modifier = Modifier.fillMaxWidth())
         Text("%d fingerprints · %.1f of %.1f nats".format(s.samples, s.collectedNats, s.plannedNats))
         s.scanMessage?.let { Text(it, style = MaterialTheme.typography.bodySmall) }
+        s.awakeMessage?.let { Text(it, style = MaterialTheme.typography.bodySmall) }
+        (listOfNotNull(s.notice) + outcome?.notes.orEmpty()).forEach { Text(it, style = MaterialTheme.typography.bodySmall) }
         if (!robot) {
             Button(
-                onClick = vm.model::checkIn,
+                onClick = m::checkIn,
                 modifier = Modifier.fillMaxWidth().height(88.dp),
             ) { Text(if (s.checkInDue) "CHECK IN at ${s.nextVertex}" else "Check in at ${s.nextVertex ?: "-"}", fontSize = 22.sp) }
         }
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
-            if (s.paused) OutlinedButton(onClick = vm.model::resume) { Text("Resume") }
-            else OutlinedButton(onClick = vm.model::pause) { Text("Pause") }
-            OutlinedButton(onClick = vm.model::replan, enabled = !s.busy) { Text("Replan") }
-            Button(onClick = vm.model::finish) { Text("Finish") }
+            if (s.paused) OutlinedButton(onClick = m::resume) { Text("Resume") }
+            else OutlinedButton(onClick = m::pause) { Text("Pause") }
+            OutlinedButton(onClick = m::replan, enabled = !s.busy) { Text("Replan") }
+            Button(onClick = m::finish) { Text("Finish") }
         }
     }
     s.error?.let { msg ->
         AlertDialog(
-            onDismissRequest = vm.model::dismissError,
-            confirmButton = { TextButton(onClick = vm.model::dismissError) { Text("OK") } },
+            onDismissRequest = m::dismissError,
+            confirmButton = { TextButton(onClick = m::dismissError) { Text("OK") } },
             text = { Text(msg) },
         )
     }
