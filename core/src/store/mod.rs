@@ -210,7 +210,19 @@ impl Store {
         &self,
         building: impl Into<BuildingRef<'a>>,
     ) -> Result<BuildingInfo> {
-        buildings::delete(&mut self.lock(), building.into())
+        buildings::delete(&mut self.lock(), building.into(), |_| Ok(()))
+    }
+
+    /// Like [`Store::delete_building`], but `check` first sees what would go, inside the
+    /// delete's transaction, and an error from it refuses the delete with nothing changed
+    /// (the command line refuses to delete survey data without `--force`). No other writer
+    /// can add a session between the check and the delete.
+    pub fn delete_building_checked<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        check: impl FnOnce(&BuildingInfo) -> Result<()>,
+    ) -> Result<BuildingInfo> {
+        buildings::delete(&mut self.lock(), building.into(), check)
     }
 
     // ---- fits ----
