@@ -118,33 +118,60 @@ fn building_names_are_printed_escaped() {
 
 #[test]
 fn output_into_a_fifo_is_written_into_not_replaced() {
-    use std::os::unix::fs::FileTypeExt;
+    use std::io::Read;
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
     let dir = tempfile::tempdir().expect("tempdir");
     let fifo = dir.path().join("out.fifo");
     let c = std::ffi::CString::new(fifo.to_str().expect("utf-8")).expect("cstring");
     // SAFETY: a valid NUL-terminated path.
     assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
-    let reader = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || std::fs::read_to_string(&fifo).expect("read the fifo"))
-    };
+    // The read end is opened without blocking, so that a writer that replaces the FIFO
+    // instead of opening it makes the test fail rather than hang.
+    let mut reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(&fifo)
+        .expect("open the fifo");
     let a1 = shared_instance("area-one.json");
     let db = dir.path().join("t.db");
-    let out = run(
-        &db,
-        &[
-            "export",
-            a1.to_str().expect("utf-8"),
-            "-o",
-            fifo.to_str().expect("utf-8"),
-        ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = reader.join().expect("reader");
+    let mut child = std::process::Command::new(store_common::BIN)
+        .arg("--db")
+        .arg(&db)
+        .args(["export", a1.to_str().expect("utf-8"), "-o"])
+        .arg(&fifo)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let mut text = Vec::new();
+    let mut buf = [0u8; 1 << 16];
+    let status = loop {
+        match reader.read(&mut buf) {
+            Ok(n) if n > 0 => text.extend_from_slice(&buf[..n]),
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e) => panic!("read the fifo: {e}"),
+        }
+        if let Some(status) = child.try_wait().expect("wait") {
+            // Whatever is still in the pipe.
+            while let Ok(n) = reader.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                text.extend_from_slice(&buf[..n]);
+            }
+            break status;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut stderr)
+        .expect("stderr");
+    assert!(status.success(), "{stderr}");
+    let text = String::from_utf8(text).expect("utf-8");
     let v: serde_json::Value = serde_json::from_str(&text).expect("the export came through");
     assert_eq!(v["name"], "Area One (synthetic)");
     let meta = std::fs::symlink_metadata(&fifo).expect("meta");
@@ -193,10 +220,11 @@ fn output_is_never_written_through_a_planted_temporary_name() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_eq!(
-        std::fs::read(&victim).expect("victim"),
-        b"precious",
-        "written through a planted link"
+    let victim_now = std::fs::read(&victim).expect("victim");
+    assert!(
+        victim_now == b"precious",
+        "written through a planted link: the victim now starts {:?}",
+        String::from_utf8_lossy(&victim_now[..victim_now.len().min(40)])
     );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&target).expect("target")).expect("json");
