@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use rusqlite::{Connection, OpenFlags};
 
-use super::migrations::{Inspection, inspect, open_error};
+use super::migrations::{inspect, open_error};
 use crate::{Error, Result};
 
 /// How long a statement waits for a lock held by another connection before failing. Long
@@ -45,11 +45,13 @@ fn common_pragmas(conn: &Connection) -> rusqlite::Result<()> {
 }
 
 /// Opens (creating if needed) the writer connection of a database file, checks that it is
-/// ours (empty, or our schema at a version this build knows, passing `PRAGMA quick_check`),
-/// configures it and migrates it. Nothing is written to a file that turns out not to be a
-/// database, another program's database, a damaged or corrupt one, or one from a newer
-/// version: every check reads only, and runs before the first pragma that writes.
-pub(crate) fn open_writer(path: &Path) -> Result<Connection> {
+/// ours (empty, or our schema at a version this build knows), configures it and migrates
+/// it. Nothing is written to a file that turns out not to be a database, another program's
+/// database, a damaged one (a table missing), or one from a newer version: every check
+/// reads only, and runs before the first pragma that writes. A database that must be
+/// migrated also passes `PRAGMA quick_check` first; the second value says whether it did
+/// (otherwise the store runs it before its first write).
+pub(crate) fn open_writer(path: &Path) -> Result<(Connection, bool)> {
     let name = path.display().to_string();
     // No SQLITE_OPEN_URI: a file called `file:x` is a file, not a URI.
     let flags = OpenFlags::SQLITE_OPEN_READ_WRITE
@@ -59,8 +61,13 @@ pub(crate) fn open_writer(path: &Path) -> Result<Connection> {
     // The checks below read; a writer busy committing makes them wait, not fail.
     conn.busy_timeout(BUSY_TIMEOUT)
         .map_err(|e| open_error(&name, e))?;
-    // The header is read here first: a file that is not SQLite fails now, untouched.
-    let version = inspect(&conn, &name, Inspection::Integrity)?;
+    // The header is read here first: a file that is not SQLite fails now, untouched. A
+    // database that is behind (or new) is written to by the migration below: check it whole.
+    let version = inspect(&conn, &name)?;
+    let checked = version < super::migrations::SCHEMA_VERSION;
+    if checked {
+        super::migrations::quick_check(&conn, &name)?;
+    }
     if conn.is_readonly("main").map_err(|e| open_error(&name, e))? {
         return Err(Error::Database {
             path: name,
@@ -72,7 +79,7 @@ pub(crate) fn open_writer(path: &Path) -> Result<Connection> {
     if version < super::migrations::SCHEMA_VERSION {
         super::migrations::migrate(&mut conn, &name)?;
     }
-    Ok(conn)
+    Ok((conn, checked))
 }
 
 /// Opens an in-memory database at the current schema (tests, throw-away plans).
@@ -90,7 +97,7 @@ pub(crate) fn open_reader(path: &Path) -> Result<Connection> {
     let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
     let conn = Connection::open_with_flags(path, flags).map_err(|e| open_error(&name, e))?;
     common_pragmas(&conn).map_err(|e| open_error(&name, e))?;
-    let version = inspect(&conn, &name, Inspection::Schema)?;
+    let version = inspect(&conn, &name)?;
     if version < super::migrations::SCHEMA_VERSION {
         return Err(Error::Database {
             path: name,

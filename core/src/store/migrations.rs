@@ -137,23 +137,16 @@ fn expected_schemas() -> Result<&'static [Vec<SchemaObject>]> {
     Ok(SCHEMAS.get_or_init(|| out))
 }
 
-/// How thoroughly [`inspect`] looks at a database.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Inspection {
-    /// Version and schema (readers, which never write).
-    Schema,
-    /// Version, schema and `PRAGMA quick_check` (the writer, before its first write).
-    Integrity,
-}
-
 /// Decides, reading only, whether a database is one this build may use, and returns its
 /// schema version. A database is ours when it is empty (version 0, no schema objects) or
 /// carries every table, index and trigger our migrations create at its version, exactly as
 /// they create them; anything else (another program's file, a dropped table, a newer
-/// version, a file failing `PRAGMA quick_check`) is refused with the reason, and nothing
+/// version) is refused with the reason, and nothing
 /// has been written to it: call this before any pragma that writes (`journal_mode`).
 /// Everything is read in one read transaction, so a concurrent migration is seen whole.
-pub(crate) fn inspect(conn: &Connection, path: &str, depth: Inspection) -> Result<u32> {
+/// `PRAGMA quick_check`, which reads every page, is [`quick_check`], run before the first
+/// write.
+pub(crate) fn inspect(conn: &Connection, path: &str) -> Result<u32> {
     let refuse = |message: String| Error::Database {
         path: path.to_string(),
         message,
@@ -204,25 +197,38 @@ pub(crate) fn inspect(conn: &Connection, path: &str, depth: Inspection) -> Resul
             Some(_) => {}
         }
     }
-    if depth == Inspection::Integrity {
-        let problems = tx
-            .prepare("PRAGMA quick_check(5)")
-            .and_then(|mut st| {
-                st.query_map([], |r| r.get::<_, String>(0))?
-                    .collect::<rusqlite::Result<Vec<String>>>()
-            })
-            .map_err(|e| open_error(path, e))?;
-        if problems != ["ok"] {
-            return Err(refuse(format!(
-                "the database is corrupt (PRAGMA quick_check: {}); it was left untouched \
-                 (restore a backup, or export what still reads with another tool)",
-                problems.join("; ")
-            )));
-        }
-    }
     // A read transaction: ending it writes nothing.
     tx.rollback().map_err(|e| open_error(path, e))?;
     Ok(found)
+}
+
+/// Runs `PRAGMA quick_check` (every page's b-tree structure, NOT NULL and CHECK
+/// constraints) and refuses a database that fails it, naming the first problems. Reads only.
+pub(crate) fn quick_check(conn: &Connection, path: &str) -> Result<()> {
+    // A page too broken to walk makes the pragma fail instead of reporting it.
+    let problems = conn
+        .prepare("PRAGMA quick_check(5)")
+        .and_then(|mut st| {
+            st.query_map([], |r| r.get::<_, String>(0))?
+                .collect::<rusqlite::Result<Vec<String>>>()
+        })
+        .or_else(|e| match e.sqlite_error_code() {
+            Some(rusqlite::ErrorCode::DatabaseCorrupt | rusqlite::ErrorCode::NotADatabase) => {
+                Ok(vec![e.to_string()])
+            }
+            _ => Err(open_error(path, e)),
+        })?;
+    if problems != ["ok"] {
+        return Err(Error::Database {
+            path: path.to_string(),
+            message: format!(
+                "the database is corrupt (PRAGMA quick_check: {}); nothing was written to it \
+                 (restore a backup, or export what still reads with another tool)",
+                problems.join("; ")
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Turns an SQLite error met while opening a database into a message that names the file
