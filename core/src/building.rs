@@ -20,12 +20,95 @@ pub const FORMAT: &str = "survey-building/1";
 /// Shortest allowed edge, metres (SPEC section 1).
 pub const MIN_EDGE_LENGTH: f64 = 1e-6;
 
+/// Largest allowed |x| and |y| of a vertex or a fingerprint, metres (SPEC section 7). A
+/// building a thousand kilometres across is not a building; the bound keeps every distance,
+/// edge length and walk length finite (1e308 would make an edge of infinite length).
+pub const MAX_COORDINATE: f64 = 1e6;
+
+/// Longest allowed edge, metres: ten times the largest coordinate, room for any detour an
+/// explicit length describes, while the total of a file's edges stays far from overflow.
+pub const MAX_EDGE_LENGTH: f64 = 1e7;
+
+/// Strongest RSS a fingerprint may hold, dBm (SPEC section 7; the same rule as a scan).
+pub const MAX_RSS_DBM: f64 = crate::session::MAX_RSS_DBM;
+
+/// Weakest RSS a fingerprint may hold, dBm.
+pub const MIN_RSS_DBM: f64 = crate::session::MIN_RSS_DBM;
+
+/// Serde helpers that hold the format to its JSON shape: a record is a JSON object (serde's
+/// derive would also read a struct from a positional array such as `["a", 0.0, 0.0, 0]`),
+/// and an optional field is absent or a value, never `null`.
+pub(crate) mod shape {
+    use std::fmt;
+    use std::marker::PhantomData;
+
+    use serde::de::{Deserialize, Deserializer, MapAccess, Visitor, value::MapAccessDeserializer};
+
+    /// `T` read from a JSON object only.
+    pub struct Object<T>(pub T);
+
+    impl<'de, T: Deserialize<'de>> Deserialize<'de> for Object<T> {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+            struct V<T>(PhantomData<T>);
+            impl<'de, T: Deserialize<'de>> Visitor<'de> for V<T> {
+                type Value = T;
+                fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                    f.write_str("a JSON object")
+                }
+                fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+                    T::deserialize(MapAccessDeserializer::new(map))
+                }
+            }
+            d.deserialize_map(V(PhantomData)).map(Object)
+        }
+    }
+
+    /// An object only (the top-level document, a bundle's building).
+    pub fn object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+        Object::deserialize(d).map(|o| o.0)
+    }
+
+    /// A list of objects.
+    pub fn objects<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Vec<T>, D::Error> {
+        let list: Vec<Object<T>> = Vec::deserialize(d)?;
+        Ok(list.into_iter().map(|o| o.0).collect())
+    }
+
+    /// An optional list of objects: absent is `None` (with `#[serde(default)]`), `null` is
+    /// refused.
+    pub fn some_objects<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<Vec<T>>, D::Error> {
+        objects(d).map(Some)
+    }
+
+    /// An optional object: absent is `None`, `null` is refused.
+    pub fn some_object<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<T>, D::Error> {
+        object(d).map(Some)
+    }
+
+    /// An optional value: absent is `None`, `null` is refused.
+    pub fn some<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<T>, D::Error> {
+        T::deserialize(d).map(Some)
+    }
+}
+
 /// A floor as written in the file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FloorSpec {
     pub id: i64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "shape::some",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub name: Option<String>,
 }
 
@@ -38,7 +121,11 @@ pub struct VertexSpec {
     pub y: f64,
     #[serde(default)]
     pub floor: i64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "shape::some",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub label: Option<String>,
 }
 
@@ -48,7 +135,11 @@ pub struct VertexSpec {
 pub struct EdgeSpec {
     pub a: String,
     pub b: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "shape::some",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub length: Option<f64>,
 }
 
@@ -70,48 +161,73 @@ impl Fingerprint {
     }
 }
 
-/// The JSON document `survey-building/1`, field for field.
+/// The JSON document `survey-building/1`, field for field. Records are JSON objects and
+/// optional fields are absent or a value, never `null` (the `shape` helpers).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BuildingFile {
     pub format: String,
     pub name: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "shape::some_objects",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub floors: Option<Vec<FloorSpec>>,
+    #[serde(deserialize_with = "shape::objects")]
     pub vertices: Vec<VertexSpec>,
+    #[serde(deserialize_with = "shape::objects")]
     pub edges: Vec<EdgeSpec>,
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        deserialize_with = "shape::objects",
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub pilot: Vec<Fingerprint>,
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        deserialize_with = "shape::objects",
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub test_points: Vec<Fingerprint>,
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        deserialize_with = "shape::objects",
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub dense_survey: Vec<Fingerprint>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "shape::some_object",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub kernel: Option<Kernel>,
 }
 
 impl BuildingFile {
     /// Parses JSON text; `origin` names the source in errors. Type errors carry the JSON
-    /// path of the offending value (`vertices[3].x`).
+    /// path of the offending value (`vertices[3].x`). The text must be exactly one JSON
+    /// object: an array, or anything after the document (a second document, stray text), is
+    /// refused rather than silently dropped.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        // serde's derive would also read the struct from a JSON array; the format is an object.
-        if text.trim_start().starts_with('[') {
-            return Err(Error::Parse {
-                origin: origin.to_string(),
-                path: "$".into(),
-                message: "expected a JSON object".into(),
-            });
-        }
         let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            Error::Parse {
-                origin: origin.to_string(),
-                path: if path == "." { "$".into() } else { path },
-                message: inner.to_string(),
-            }
-        })
+        let file: Self = serde_path_to_error::deserialize(&mut *de)
+            .map(|o: shape::Object<Self>| o.0)
+            .map_err(|e| {
+                let path = e.path().to_string();
+                let inner = e.into_inner();
+                Error::Parse {
+                    origin: origin.to_string(),
+                    path: if path == "." { "$".into() } else { path },
+                    message: inner.to_string(),
+                }
+            })?;
+        de.end().map_err(|e| Error::Parse {
+            origin: origin.to_string(),
+            path: "$".into(),
+            message: format!("unexpected data after the JSON document ({e})"),
+        })?;
+        Ok(file)
     }
 
     /// Reads and parses a file.
@@ -243,10 +359,14 @@ impl Building {
                 ));
             }
             for (name, val) in [("x", v.x), ("y", v.y)] {
-                if !val.is_finite() {
+                if !coordinate_ok(val) {
                     return Err(bad(
                         format!("vertices[{i}].{name}"),
-                        format!("vertex {:?}: {name} must be finite, got {val}", v.id),
+                        format!(
+                            "vertex {:?}: {name} must be a finite number of metres with \
+                             |{name}| <= {MAX_COORDINATE:e}, got {val:e}",
+                            v.id
+                        ),
                     ));
                 }
             }
@@ -319,6 +439,15 @@ impl Building {
                             format!("edges[{i}].length"),
                             format!(
                                 "edge {:?}-{:?}: length must be a finite non-negative number, got {l}",
+                                e.a, e.b
+                            ),
+                        ));
+                    }
+                    if l > MAX_EDGE_LENGTH {
+                        return Err(bad(
+                            format!("edges[{i}].length"),
+                            format!(
+                                "edge {:?}-{:?}: length {l:e} m is longer than {MAX_EDGE_LENGTH:e} m",
                                 e.a, e.b
                             ),
                         ));
@@ -404,10 +533,13 @@ impl Building {
         ] {
             for (i, fp) in list.iter().enumerate() {
                 for (name, val) in [("x", fp.x), ("y", fp.y)] {
-                    if !val.is_finite() {
+                    if !coordinate_ok(val) {
                         return Err(bad(
                             format!("{field}[{i}].{name}"),
-                            format!("must be finite, got {val}"),
+                            format!(
+                                "must be a finite number of metres with |{name}| <= \
+                                 {MAX_COORDINATE:e}, got {val:e}"
+                            ),
                         ));
                     }
                 }
@@ -418,10 +550,12 @@ impl Building {
                     ));
                 }
                 for (ap, &rss) in &fp.rss {
-                    if !rss.is_finite() || !(-150.0..=30.0).contains(&rss) {
+                    if !rss_ok(rss) {
                         return Err(bad(
                             format!("{field}[{i}].rss.{ap}"),
-                            format!("RSS must be a finite dBm value in [-150, 30], got {rss}"),
+                            format!(
+                                "RSS must be a finite dBm value in [{MIN_RSS_DBM}, {MAX_RSS_DBM}], got {rss}"
+                            ),
                         ));
                     }
                 }
@@ -606,6 +740,17 @@ impl Building {
     pub fn walk_ids(&self, walk: &[usize]) -> Vec<String> {
         walk.iter().map(|&v| self.vertices[v].id.clone()).collect()
     }
+}
+
+/// Whether a coordinate is finite and within [`MAX_COORDINATE`] of the origin.
+fn coordinate_ok(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_COORDINATE
+}
+
+/// Whether an RSS value is a finite dBm value in [[`MIN_RSS_DBM`], [`MAX_RSS_DBM`]], the one
+/// rule for building files, scans and bundles.
+pub fn rss_ok(rss: f64) -> bool {
+    rss.is_finite() && (MIN_RSS_DBM..=MAX_RSS_DBM).contains(&rss)
 }
 
 /// Connected components as lists of vertex indices, each list sorted, largest first.

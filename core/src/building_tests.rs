@@ -183,7 +183,7 @@ fn non_finite_numbers_are_rejected() {
     v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": 5.0e3}}]);
     let e = err_of(v);
     assert!(
-        e.contains("pilot[0].rss.ap: RSS must be a finite dBm value in [-150, 30], got 5000"),
+        e.contains("pilot[0].rss.ap: RSS must be a finite dBm value in [-120, 0], got 5000"),
         "{e}"
     );
     let mut v = base();
@@ -193,6 +193,152 @@ fn non_finite_numbers_are_rejected() {
         e.contains("kernel.ell: must be a finite positive number, got -2"),
         "{e}"
     );
+}
+
+#[test]
+fn trailing_data_after_the_document_is_refused() {
+    let text = base().to_string();
+    for (tail, what) in [
+        (" THIS IS NOT JSON", "stray text"),
+        ("\n{\"format\": \"survey-building/1\"}", "a second document"),
+        (&*base().to_string(), "the same document twice"),
+        ("]", "a stray bracket"),
+    ] {
+        let e = Building::from_json(&format!("{text}{tail}"), "t.json")
+            .expect_err(what)
+            .to_string();
+        assert!(
+            e.starts_with("t.json: $: unexpected data after the JSON document (trailing characters at line"),
+            "{what}: {e}"
+        );
+    }
+    // Whitespace after the document is not data.
+    Building::from_json(&format!("{text} \n\t\r\n"), "t.json").expect("trailing whitespace");
+}
+
+#[test]
+fn positional_arrays_are_refused_naming_the_path() {
+    let cases: Vec<(&str, serde_json::Value, &str)> = vec![
+        ("vertices", serde_json::json!([["a", 0.0, 0.0, 0], {"id": "b", "x": 3.0, "y": 4.0}, {"id": "c", "x": 3.0, "y": 0.0}]), "vertices[0]"),
+        ("edges", serde_json::json!([{"a": "a", "b": "b"}, ["b", "c", 4.5]]), "edges[1]"),
+        ("floors", serde_json::json!([[0, "Ground"]]), "floors[0]"),
+        ("pilot", serde_json::json!([[0.0, 1.0, 0, {"ap": -60.0}]]), "pilot[0]"),
+        ("test_points", serde_json::json!([[0.0, 1.0]]), "test_points[0]"),
+        ("dense_survey", serde_json::json!([{"x": 0.0, "y": 1.0}, [0.0, 2.0]]), "dense_survey[1]"),
+        ("kernel", serde_json::json!([40.0, 6.0, 9.0]), "kernel"),
+    ];
+    for (field, value, path) in cases {
+        let mut v = base();
+        v[field] = value;
+        let e = err_of(v);
+        assert!(
+            e.starts_with(&format!("t.json: {path}: invalid type: sequence, expected a JSON object")),
+            "{field}: {e}"
+        );
+    }
+    // The whole document as an array.
+    let e = Building::from_json(r#"["survey-building/1", "T", [], []]"#, "t.json")
+        .expect_err("array document")
+        .to_string();
+    assert!(e.starts_with("t.json: $: invalid type: sequence, expected a JSON object"), "{e}");
+}
+
+#[test]
+fn nulls_are_refused_naming_the_path() {
+    let mut cases: Vec<(serde_json::Value, &str)> = Vec::new();
+    let mut v = base();
+    v["floors"] = serde_json::Value::Null;
+    cases.push((v, "floors"));
+    let mut v = base();
+    v["vertices"][2]["label"] = serde_json::Value::Null;
+    cases.push((v, "vertices[2].label"));
+    let mut v = base();
+    v["edges"][1]["length"] = serde_json::Value::Null;
+    cases.push((v, "edges[1].length"));
+    let mut v = base();
+    v["floors"] = serde_json::json!([{"id": 0, "name": null}]);
+    cases.push((v, "floors[0].name"));
+    let mut v = base();
+    v["kernel"] = serde_json::Value::Null;
+    cases.push((v, "kernel"));
+    let mut v = base();
+    v["pilot"] = serde_json::Value::Null;
+    cases.push((v, "pilot"));
+    let mut v = base();
+    v["vertices"][0]["floor"] = serde_json::Value::Null;
+    cases.push((v, "vertices[0].floor"));
+    let mut v = base();
+    v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": null}]);
+    cases.push((v, "pilot[0].rss"));
+    for (v, path) in cases {
+        let e = err_of(v);
+        assert!(
+            e.starts_with(&format!("t.json: {path}: invalid type: null, expected")),
+            "{path}: {e}"
+        );
+    }
+}
+
+#[test]
+fn coordinates_and_lengths_are_bounded() {
+    // The bound itself is allowed, on both axes and both signs.
+    let mut v = base();
+    v["vertices"][0]["x"] = serde_json::json!(-1e6);
+    v["vertices"][0]["y"] = serde_json::json!(1e6);
+    v["pilot"] = serde_json::json!([{"x": 1e6, "y": -1e6, "rss": {"ap": -60.0}}]);
+    let b = Building::from_json(&v.to_string(), "t.json").expect("on the bound");
+    assert!(b.total_edge_length().is_finite());
+
+    for (path, value) in [
+        ("vertices[1].x", 1e308),
+        ("vertices[1].y", -1.000001e6),
+    ] {
+        let mut v = base();
+        let axis = &path[path.len() - 1..];
+        v["vertices"][1][axis] = serde_json::json!(value);
+        let e = err_of(v);
+        assert!(
+            e.contains(&format!(
+                "t.json: {path}: vertex \"b\": {axis} must be a finite number of metres with |{axis}| <= 1e6, got {value:e}"
+            )),
+            "{e}"
+        );
+    }
+    let mut v = base();
+    v["test_points"] = serde_json::json!([{"x": 0.0, "y": 2e6}]);
+    let e = err_of(v);
+    assert!(
+        e.contains("t.json: test_points[0].y: must be a finite number of metres with |y| <= 1e6, got 2e6"),
+        "{e}"
+    );
+    // An explicit length may exceed the straight line, but not without bound.
+    let mut v = base();
+    v["edges"][1]["length"] = serde_json::json!(1e300);
+    let e = err_of(v);
+    assert!(
+        e.contains("t.json: edges[1].length: edge \"b\"-\"c\": length 1e300 m is longer than 1e7 m"),
+        "{e}"
+    );
+}
+
+#[test]
+fn rss_is_between_minus_120_and_0_dbm() {
+    for ok in [-120.0, -60.5, 0.0] {
+        let mut v = base();
+        v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": ok}}]);
+        Building::from_json(&v.to_string(), "t.json").expect("in range");
+    }
+    for (field, bad) in [("pilot", 25.0), ("test_points", -120.5), ("dense_survey", 0.01)] {
+        let mut v = base();
+        v[field] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap-7": bad}}]);
+        let e = err_of(v);
+        assert!(
+            e.contains(&format!(
+                "t.json: {field}[0].rss.ap-7: RSS must be a finite dBm value in [-120, 0], got {bad}"
+            )),
+            "{e}"
+        );
+    }
 }
 
 #[test]

@@ -255,8 +255,32 @@ fn read_only_locations_give_one_clear_error() {
     std::fs::set_permissions(&db, std::fs::Permissions::from_mode(0o444)).expect("chmod");
     std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).expect("chmod");
     let as_root = !permissions_bind(&ro);
+    // What `nobody` runs and reads is copied into this test's own directory (mode 0755):
+    // the checkout itself may sit where `nobody` cannot enter (a clone under `mktemp -d`,
+    // mode 0700), and then running the binary from there fails with `Permission denied`.
+    let bin = dir.path().join("trailprint");
+    std::fs::copy(BIN, &bin).expect("copy the binary");
+    std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    let a1_copy = dir.path().join("area-one.json");
+    std::fs::copy(a1, &a1_copy).expect("copy the building");
+    std::fs::set_permissions(&a1_copy, std::fs::Permissions::from_mode(0o644)).expect("chmod");
+    let a1 = a1_copy.to_str().expect("utf-8");
+    // The temporary directory's own ancestors must let `nobody` through; where they do not
+    // (TMPDIR inside a private directory), this part cannot apply and is skipped, saying so.
+    let reachable = dir.path().ancestors().skip(1).all(|d| {
+        std::fs::metadata(d).is_ok_and(|m| m.permissions().mode() & 0o001 != 0)
+    });
+    if as_root && !reachable {
+        eprintln!(
+            "skipped the read-only database case: user nobody cannot reach {} \
+             (a parent directory has no search permission for others)",
+            dir.path().display()
+        );
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+        return;
+    }
     let run_limited = |db: &Path, args: &[&str]| {
-        let mut cmd = Command::new(BIN);
+        let mut cmd = Command::new(&bin);
         cmd.arg("--db").arg(db).args(args);
         if as_root {
             cmd.uid(65534).gid(65534);
@@ -283,4 +307,208 @@ fn usage_errors_exit_with_2_and_missing_buildings_with_1() {
     assert_one_error(&out, &["No Such Building", "Area One (synthetic)"]);
     let out = run(&db, &["import", "/nonexistent/b.json"]);
     assert_one_error(&out, &["/nonexistent/b.json", "No such file"]);
+}
+
+/// The simulate command the issue found writing into damaged databases: it plans (a plan
+/// row), then records a session.
+fn simulate_args() -> Vec<String> {
+    [
+        "simulate",
+        "--building",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json"),
+        "--start",
+        "f0-c00",
+        "--end",
+        "f0-r5-door",
+        "--budget",
+        "30",
+        "--time-limit",
+        "0.2",
+        "--surveyor",
+        "robot",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect()
+}
+
+/// Runs every store command of `commands` on `db`; each must fail with one error line
+/// holding all of `needles`, and leave the file byte for byte as it was, with no `-wal` or
+/// `-shm` file beside it.
+fn refused_untouched(db: &Path, needles: &[&str]) {
+    refused_untouched_when(db, needles, true);
+}
+
+/// [`refused_untouched`]; `reads_too`: `buildings`, which only reads, is refused as well
+/// (else it may succeed, and must leave the file untouched too).
+fn refused_untouched_when(db: &Path, needles: &[&str], reads_too: bool) {
+    let bytes = std::fs::read(db).expect("read");
+    let a1 = shared_instance("area-one.json");
+    let sim = simulate_args();
+    let commands: Vec<Vec<&str>> = vec![
+        vec!["buildings"],
+        vec!["import", a1.to_str().expect("utf-8")],
+        sim.iter().map(String::as_str).collect(),
+    ];
+    for args in commands {
+        let out = run(db, &args);
+        if reads_too || args[0] != "buildings" {
+            assert_one_error(&out, needles);
+        }
+        assert!(
+            std::fs::read(db).expect("read") == bytes,
+            "{args:?} changed the file"
+        );
+        for ext in ["-wal", "-shm", "-journal"] {
+            let mut side = db.as_os_str().to_owned();
+            side.push(ext);
+            assert!(
+                !Path::new(&side).exists(),
+                "{args:?} left {}",
+                Path::new(&side).display()
+            );
+        }
+    }
+}
+
+#[test]
+fn another_programs_database_is_refused_byte_for_byte() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // Version 0 (the header's user_version) with a table of its own, in the default
+    // rollback-journal mode: before issue 14, opening it switched it to WAL and gave it our
+    // tables next to its own.
+    let db = dir.path().join("notes.db");
+    {
+        let c = rusqlite::Connection::open(&db).expect("open");
+        c.execute_batch(
+            "CREATE TABLE notes (id INTEGER PRIMARY KEY, body TEXT);
+             INSERT INTO notes (body) VALUES ('buy milk'), ('call Ann');",
+        )
+        .expect("notes");
+    }
+    refused_untouched(
+        &db,
+        &[
+            db.to_str().expect("utf-8"),
+            "not a trailprint database",
+            "\"notes\"",
+            "left untouched",
+        ],
+    );
+    // Another program that numbers its own schema (user_version 1, our first version).
+    let db = dir.path().join("other.db");
+    {
+        let c = rusqlite::Connection::open(&db).expect("open");
+        c.execute_batch("CREATE TABLE buildings (id INTEGER PRIMARY KEY, address TEXT);")
+            .expect("table");
+        c.pragma_update(None, "user_version", 1).expect("version");
+    }
+    refused_untouched(
+        &db,
+        &[
+            db.to_str().expect("utf-8"),
+            "schema version 1",
+            "damaged or not trailprint's",
+        ],
+    );
+}
+
+#[test]
+fn a_database_missing_a_table_is_refused_before_anything_is_written() {
+    let (_dir, db) = seeded_db();
+    {
+        let c = rusqlite::Connection::open(&db).expect("open");
+        c.execute_batch("DROP TABLE bundle_imports;").expect("drop");
+    }
+    refused_untouched(
+        &db,
+        &[
+            db.to_str().expect("utf-8"),
+            &format!(
+                "schema version {} needs table \"bundle_imports\", which is missing",
+                trailprint::store::SCHEMA_VERSION
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_database_failing_quick_check_is_refused_before_anything_is_written() {
+    let (_dir, db) = seeded_db();
+    // Break the b-tree page of a table that planning and sessions never read (the bundle
+    // imports, empty here): its page-type byte becomes invalid. The header and the schema
+    // still read, so only `PRAGMA quick_check` sees it.
+    let (page_size, root): (i64, i64) = {
+        let c = rusqlite::Connection::open(&db).expect("open");
+        let page_size = c
+            .pragma_query_value(None, "page_size", |r| r.get(0))
+            .expect("page size");
+        let root = c
+            .query_row(
+                "SELECT rootpage FROM sqlite_master WHERE name = 'bundle_imports'",
+                [],
+                |r| r.get(0),
+            )
+            .expect("root page");
+        (page_size, root)
+    };
+    let mut bytes = std::fs::read(&db).expect("read");
+    let at = ((root - 1) * page_size) as usize;
+    assert!(
+        [0x0a, 0x0d].contains(&bytes[at]),
+        "a b-tree leaf page, got {:#x}",
+        bytes[at]
+    );
+    bytes[at] = 0xff;
+    std::fs::write(&db, &bytes).expect("write");
+    // Commands that write are refused; listing (which does not read that page) may run.
+    refused_untouched_when(
+        &db,
+        &[db.to_str().expect("utf-8"), "corrupt", "nothing was written"],
+        false,
+    );
+}
+
+#[test]
+fn a_slow_writer_makes_a_second_command_wait_instead_of_failing() {
+    let (_dir, db) = seeded_db();
+    // Another connection holds the write lock for 7 s, longer than the 5 s the store used
+    // to wait: as a 60 MB import does (6.8 s on the reference machine).
+    let hold = std::time::Duration::from_secs(7);
+    let (locked_tx, locked_rx) = std::sync::mpsc::channel();
+    let holder = {
+        let db = db.clone();
+        std::thread::spawn(move || {
+            let mut c = rusqlite::Connection::open(&db).expect("open");
+            let tx = c
+                .transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)
+                .expect("lock");
+            tx.execute("UPDATE buildings SET source = source", [])
+                .expect("write");
+            locked_tx.send(()).expect("send");
+            std::thread::sleep(hold);
+            tx.commit().expect("commit");
+        })
+    };
+    locked_rx.recv().expect("locked");
+    let t = std::time::Instant::now();
+    // A command that only reads does not wait for the writer at all (WAL; opening an up to
+    // date database takes no write lock).
+    let list = run_ok(&db, &["buildings"]);
+    assert!(list.contains("Area One"), "{list}");
+    assert!(
+        t.elapsed() < std::time::Duration::from_secs(3),
+        "buildings waited {:?}",
+        t.elapsed()
+    );
+    // A command that writes waits for the lock, then succeeds.
+    let a2 = shared_instance("area-two.json");
+    let msg = run_ok(&db, &["import", a2.to_str().expect("utf-8")]);
+    assert!(msg.starts_with("imported building 2"), "{msg}");
+    assert!(
+        t.elapsed() >= hold - std::time::Duration::from_secs(1),
+        "it cannot have written while the lock was held: {:?}",
+        t.elapsed()
+    );
+    holder.join().expect("holder");
 }

@@ -294,3 +294,152 @@ fn conflicting_histories_are_refused_whole() {
     assert!(e.contains("conflicting histories at event 2"), "{e}");
     assert_eq!((content(&x), counts(&x)), before);
 }
+
+/// Re-signs a bundle document after editing its body (what a forger, or a buggy exporter,
+/// produces: the checksum is right, the content is not).
+fn resign(doc: &mut serde_json::Value) -> String {
+    use sha2::Digest;
+    let body = doc["body"].to_string();
+    doc["sha256"] = sha2::Sha256::digest(body.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect::<String>()
+        .into();
+    doc.to_string()
+}
+
+#[test]
+fn a_shared_event_that_differs_in_a_reading_is_a_conflict() {
+    let (a, _) = device(1_000, 3);
+    let good = export(&a, "phone-a", "Ann");
+    let x = Store::open_in_memory().expect("x");
+    x.import_bundle(&good, "a").expect("a");
+    let before = (content(&x), counts(&x));
+    // Same kinds, same times: only one RSS reading of the second scan (event 3) changes.
+    let mut doc: serde_json::Value = serde_json::from_str(&good).expect("json");
+    let uid = doc["body"]["sessions"][0]["uid"]
+        .as_str()
+        .expect("uid")
+        .to_string();
+    let ev = &mut doc["body"]["sessions"][0]["events"][2];
+    assert_eq!(ev["event"]["kind"], "scan");
+    ev["event"]["rss"]["ap-01"] = (-99.0).into();
+    let forged = resign(&mut doc);
+    let e = x
+        .import_bundle(&forged, "forged")
+        .expect_err("conflict")
+        .to_string();
+    assert!(
+        e.contains(&format!("(session {uid}): conflicting histories at event 3")),
+        "{e}"
+    );
+    assert!(e.contains("-99") && e.contains("-51"), "{e}");
+    assert_eq!((content(&x), counts(&x)), before, "nothing may change");
+
+    // A replan to another plan (same kind, same time) conflicts as well.
+    let mut doc: serde_json::Value = serde_json::from_str(&good).expect("json");
+    let n = doc["body"]["sessions"][0]["events"]
+        .as_array()
+        .expect("events")
+        .len();
+    let replan = &doc["body"]["sessions"][0]["events"][n - 1]["event"];
+    assert_eq!(replan["kind"], "replan");
+    let target = replan["plan_id"].as_i64().expect("plan id");
+    for p in doc["body"]["sessions"][0]["plans"]
+        .as_array_mut()
+        .expect("plans")
+    {
+        if p["source_id"] == target {
+            p["plan"]["budget_m"] = 77.0.into();
+        }
+    }
+    let forged = resign(&mut doc);
+    let e = x
+        .import_bundle(&forged, "forged")
+        .expect_err("conflict")
+        .to_string();
+    assert!(
+        e.contains(&format!("conflicting histories at event {n}")) && e.contains("different plans"),
+        "{e}"
+    );
+    assert_eq!((content(&x), counts(&x)), before);
+}
+
+#[test]
+fn events_after_finish_are_refused_in_bundles_and_in_the_store() {
+    let (a, sid) = device(1_000, 2);
+    a.append_event(sid, 5_000, &SessionEvent::Finish)
+        .expect("finish");
+    // The store itself accepts nothing after the end of a log.
+    let before = counts(&a);
+    let e = a
+        .append_event(sid, 5_001, &scan(1.0, -60.0))
+        .expect_err("after finish")
+        .to_string();
+    assert!(
+        e.contains("the session ended with finish at event") && e.contains("(got scan)"),
+        "{e}"
+    );
+    assert_eq!(counts(&a), before);
+
+    let good = export(&a, "phone-a", "Ann");
+    let mut doc: serde_json::Value = serde_json::from_str(&good).expect("json");
+    let events = doc["body"]["sessions"][0]["events"]
+        .as_array_mut()
+        .expect("events");
+    let n = events.len();
+    events.push(serde_json::json!({"seq": n + 1, "at_ms": 6_000, "event": {"kind": "step", "steps": 2, "distance_m": 1.4}}));
+    let forged = resign(&mut doc);
+    let x = Store::open_in_memory().expect("x");
+    let e = x
+        .import_bundle(&forged, "late.json")
+        .expect_err("after finish")
+        .to_string();
+    assert!(
+        e.contains(&format!(
+            "late.json: body.sessions[0].events[{n}]: session "
+        )) && e.contains(&format!(
+            "event {} (step) comes after the session ended with finish at event {n}",
+            n + 1
+        )),
+        "{e}"
+    );
+    assert!(x.list_buildings().expect("list").is_empty());
+}
+
+#[test]
+fn a_same_name_building_with_other_geometry_is_refused() {
+    let (a, _) = device(1_000, 2);
+    let good = export(&a, "phone-a", "Ann");
+    // The receiving database has a building of the same name, one vertex moved.
+    let mut file = demo().to_file();
+    let moved = file.vertices[3].id.clone();
+    file.vertices[3].x += 0.5;
+    let other = Building::from_file(file, "moved").expect("still valid");
+    let x = Store::open_in_memory().expect("x");
+    x.import_building(&other, Some("moved"), &ImportOptions::default())
+        .expect("import");
+    let before = (content(&x), counts(&x));
+    let e = x
+        .import_bundle(&good, "a.json")
+        .expect_err("other geometry")
+        .to_string();
+    assert!(
+        e.contains(&format!(
+            "a.json: body.building: building {:?} (id 1) is already in the database with other geometry (vertex {moved:?} is at",
+            demo().name
+        )),
+        "{e}"
+    );
+    assert_eq!((content(&x), counts(&x)), before);
+    // The same geometry (labels and survey data aside) is the same building.
+    let mut file = demo().to_file();
+    file.vertices[3].label = Some("relabelled".into());
+    file.test_points.clear();
+    let same = Building::from_file(file, "same").expect("valid");
+    let y = Store::open_in_memory().expect("y");
+    y.import_building(&same, Some("same"), &ImportOptions::default())
+        .expect("import");
+    let r = y.import_bundle(&good, "a.json").expect("same geometry");
+    assert!(!r.building_created && r.sessions_added == 1);
+}

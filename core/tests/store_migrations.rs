@@ -136,8 +136,16 @@ fn a_failing_step_leaves_the_previous_version() {
         conn.execute_batch("CREATE TABLE buildings (x); INSERT INTO buildings VALUES (42);")
             .expect("clash");
     }
+    // The store refuses it before migrating (issue 14: not ours), byte for byte untouched.
+    let before = std::fs::read(&path).expect("bytes");
     let err = Store::open(&path).expect_err("clash");
+    assert!(err.to_string().contains("not a trailprint database"), "{err}");
+    assert_eq!(std::fs::read(&path).expect("bytes"), before);
+    // The migrator run on it anyway fails at step 1 and leaves version 0.
+    let mut conn = Connection::open(&path).expect("open");
+    let err = trailprint::store::migrations::migrate(&mut conn, "clash.db").expect_err("clash");
     assert!(err.to_string().contains("migration 0001_init"), "{err}");
+    drop(conn);
     let conn = Connection::open(&path).expect("open");
     assert_eq!(user_version(&conn).expect("version"), 0);
     assert_eq!(rows(&conn, "buildings"), vec!["42".to_string()]);

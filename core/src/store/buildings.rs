@@ -444,12 +444,18 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
 }
 
 /// Deletes a building; the schema's cascades remove everything that belongs to it.
-pub(super) fn delete(conn: &mut Connection, building: BuildingRef<'_>) -> Result<BuildingInfo> {
+/// `check` sees what would go and may refuse (inside the transaction).
+pub(super) fn delete(
+    conn: &mut Connection,
+    building: BuildingRef<'_>,
+    check: impl FnOnce(&BuildingInfo) -> Result<()>,
+) -> Result<BuildingInfo> {
     let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
     let id = building_id(&tx, building)?;
     let info = list(&tx, Some(id))?
         .pop()
         .ok_or_else(|| Error::NotFound(format!("{building} is not in the database")))?;
+    check(&info)?;
     tx.execute("DELETE FROM buildings WHERE id = ?1", [id])?;
     tx.commit()?;
     Ok(info)

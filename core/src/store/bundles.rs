@@ -11,7 +11,12 @@
 //! Import is one transaction and matches sessions by `uid`: a session already present gets
 //! only the events it lacks (a phone may export the same session again after walking on),
 //! so importing the same bundle twice changes nothing and bundles can be imported in any
-//! order. Two logs that disagree on an event they share are refused as conflicting.
+//! order. Refused whole, with nothing imported:
+//! * two logs that disagree on an event they share (its kind, time or any field: a scan's
+//!   readings, a replan's plan), naming the session and the event;
+//! * a log with an event after its `finish` or `abort`;
+//! * a bundle whose building has the name of a local building with other geometry (floors,
+//!   vertex positions, edges and lengths): its sessions' positions would not mean the same.
 
 use std::collections::BTreeMap;
 
@@ -67,6 +72,7 @@ pub struct BundleBody {
     pub created_ms: i64,
     pub device: Option<String>,
     pub surveyor_name: Option<String>,
+    #[serde(deserialize_with = "crate::building::shape::object")]
     pub building: BuildingFile,
     pub sessions: Vec<BundleSession>,
 }
@@ -262,12 +268,28 @@ pub fn parse_bundle(text: &str, origin: &str) -> Result<(String, BundleBody)> {
                 "must not be empty".into(),
             ));
         }
+        let mut ended: Option<(i64, &str)> = None;
         for (j, e) in s.events.iter().enumerate() {
             if e.seq != j as i64 + 1 {
                 return Err(bad(
                     &format!("body.sessions[{i}].events[{j}].seq"),
                     format!("expected seq {}, got {}", j + 1, e.seq),
                 ));
+            }
+            if let Some((end_seq, end_kind)) = ended {
+                return Err(bad(
+                    &format!("body.sessions[{i}].events[{j}]"),
+                    format!(
+                        "session {}: event {} ({}) comes after the session ended with {end_kind} \
+                         at event {end_seq}",
+                        s.uid,
+                        e.seq,
+                        e.event.kind()
+                    ),
+                ));
+            }
+            if matches!(e.event, SessionEvent::Finish | SessionEvent::Abort { .. }) {
+                ended = Some((e.seq, e.event.kind()));
             }
         }
     }
@@ -290,7 +312,18 @@ fn import_in_tx(
         )
         .optional()?;
     let (bid, building_created) = match existing {
-        Some(id) => (id, false),
+        Some(id) => {
+            let local = super::buildings::get(&tx, BuildingRef::Id(id), origin)?;
+            if let Some(diff) = geometry_difference(&local, building) {
+                return Err(Error::InvalidRequest(format!(
+                    "{origin}: body.building: building {:?} (id {id}) is already in the \
+                     database with other geometry ({diff}); its sessions cannot be attached \
+                     to it: import the bundle into another database, or rename one building",
+                    building.name
+                )));
+            }
+            (id, false)
+        }
         None => {
             let report = super::buildings::import_in(
                 &tx,
@@ -362,17 +395,44 @@ fn import_in_tx(
             }
         };
         let have: Vec<super::sessions::StoredEvent> = super::sessions::events(&tx, session_id, 0)?;
-        // The shared prefix must agree (kind and time; replans may differ in local plan id).
+        // The shared prefix must agree event for event: kind, time and every field (a
+        // replan's plan is compared by its content, since local plan ids differ).
         for (e, h) in s.events.iter().zip(&have) {
+            let conflict = |what: String| {
+                ctx(format!(
+                    "conflicting histories at event {}: {what}; nothing was imported",
+                    e.seq
+                ))
+            };
             if e.event.kind() != h.event.kind() || e.at_ms != h.at_ms {
-                return Err(ctx(format!(
-                    "conflicting histories at event {}: the bundle has {} at {} ms, the database {} at {} ms",
-                    e.seq,
+                return Err(conflict(format!(
+                    "the bundle has {} at {} ms, the database {} at {} ms",
                     e.event.kind(),
                     e.at_ms,
                     h.event.kind(),
                     h.at_ms
                 )));
+            }
+            match (&e.event, &h.event) {
+                (SessionEvent::Replan { plan_id: theirs }, SessionEvent::Replan { plan_id: ours }) => {
+                    let bundled = s.plans.iter().find(|p| p.source_id == *theirs);
+                    let local = super::plans::load(&tx, *ours)?;
+                    if bundled.map(|p| &p.plan) != Some(&local.record) {
+                        return Err(conflict(format!(
+                            "the bundle's replan (to its plan {theirs}) and the database's (to \
+                             plan {ours}) name different plans"
+                        )));
+                    }
+                }
+                (theirs, ours) if theirs != ours => {
+                    let text = |ev: &SessionEvent| serde_json::to_string(ev).unwrap_or_default();
+                    return Err(conflict(format!(
+                        "the bundle has {}, the database {}",
+                        text(theirs),
+                        text(ours)
+                    )));
+                }
+                _ => {}
             }
         }
         let new_events = &s.events[have.len().min(s.events.len())..];
@@ -428,6 +488,64 @@ fn import_in_tx(
     )?;
     tx.commit()?;
     Ok(report)
+}
+
+/// The first difference between the geometry of two buildings of the same name (floors,
+/// vertex ids and positions, edges and their lengths), or `None` if they agree. Labels and
+/// survey data may differ: they do not move a session's positions.
+fn geometry_difference(local: &Building, theirs: &Building) -> Option<String> {
+    let floors = |b: &Building| b.floors.iter().map(|f| f.id).collect::<Vec<_>>();
+    if floors(local) != floors(theirs) {
+        return Some(format!(
+            "floors {:?} here, {:?} in the bundle",
+            floors(local),
+            floors(theirs)
+        ));
+    }
+    if local.vertices.len() != theirs.vertices.len() {
+        return Some(format!(
+            "{} vertices here, {} in the bundle",
+            local.vertices.len(),
+            theirs.vertices.len()
+        ));
+    }
+    for v in &theirs.vertices {
+        let Some(i) = local.vertex_index(&v.id) else {
+            return Some(format!("vertex {:?} is not here", v.id));
+        };
+        let (p, q) = (local.vertices[i].pos, v.pos);
+        if (p.x, p.y, p.floor) != (q.x, q.y, q.floor) {
+            return Some(format!(
+                "vertex {:?} is at ({}, {}) on floor {} here, at ({}, {}) on floor {} in the bundle",
+                v.id, p.x, p.y, p.floor, q.x, q.y, q.floor
+            ));
+        }
+    }
+    if local.edges.len() != theirs.edges.len() {
+        return Some(format!(
+            "{} edges here, {} in the bundle",
+            local.edges.len(),
+            theirs.edges.len()
+        ));
+    }
+    for e in &theirs.edges {
+        let (a, b) = (&theirs.vertices[e.a].id, &theirs.vertices[e.b].id);
+        let here = local
+            .vertex_index(a)
+            .zip(local.vertex_index(b))
+            .and_then(|(i, j)| local.edge_between(i, j));
+        match here {
+            None => return Some(format!("no edge {a:?}-{b:?} here")),
+            Some(h) if h.length != e.length => {
+                return Some(format!(
+                    "edge {a:?}-{b:?} is {} m here, {} m in the bundle",
+                    h.length, e.length
+                ));
+            }
+            Some(_) => {}
+        }
+    }
+    None
 }
 
 impl Store {

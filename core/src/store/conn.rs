@@ -9,11 +9,15 @@ use std::time::Duration;
 
 use rusqlite::{Connection, OpenFlags};
 
-use super::migrations::open_error;
+use super::migrations::{inspect, open_error};
 use crate::{Error, Result};
 
-/// How long a statement waits for a lock held by another connection before failing.
-pub const BUSY_TIMEOUT: Duration = Duration::from_secs(5);
+/// How long a statement waits for a lock held by another connection before failing. Long
+/// enough for the longest write trailprint makes: an import of a 64 MiB file (the largest
+/// accepted) is one transaction of about 7 s on a desktop and several times that on a
+/// phone, and a second command started meanwhile must wait for it, not fail with
+/// "database is locked" (issue 14). A lock held longer than this is not a trailprint write.
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(120);
 
 /// Pragmas that only make sense on a connection that writes. Each with its reason.
 fn writer_pragmas(conn: &Connection) -> rusqlite::Result<()> {
@@ -40,18 +44,30 @@ fn common_pragmas(conn: &Connection) -> rusqlite::Result<()> {
     Ok(())
 }
 
-/// Opens (creating if needed) the writer connection of a database file, checks its schema
-/// version, configures it and migrates it. Nothing is written to a file that turns out not
-/// to be a database, or to be from a newer version.
-pub(crate) fn open_writer(path: &Path) -> Result<Connection> {
+/// Opens (creating if needed) the writer connection of a database file, checks that it is
+/// ours (empty, or our schema at a version this build knows), configures it and migrates
+/// it. Nothing is written to a file that turns out not to be a database, another program's
+/// database, a damaged one (a table missing), or one from a newer version: every check
+/// reads only, and runs before the first pragma that writes. A database that must be
+/// migrated also passes `PRAGMA quick_check` first; the second value says whether it did
+/// (otherwise the store runs it before its first write).
+pub(crate) fn open_writer(path: &Path) -> Result<(Connection, bool)> {
     let name = path.display().to_string();
     // No SQLITE_OPEN_URI: a file called `file:x` is a file, not a URI.
     let flags = OpenFlags::SQLITE_OPEN_READ_WRITE
         | OpenFlags::SQLITE_OPEN_CREATE
         | OpenFlags::SQLITE_OPEN_NO_MUTEX;
     let mut conn = Connection::open_with_flags(path, flags).map_err(|e| open_error(&name, e))?;
-    // The header is read here first: a file that is not SQLite fails now, untouched.
-    super::migrations::check_version(&conn, &name)?;
+    // The checks below read; a writer busy committing makes them wait, not fail.
+    conn.busy_timeout(BUSY_TIMEOUT)
+        .map_err(|e| open_error(&name, e))?;
+    // The header is read here first: a file that is not SQLite fails now, untouched. A
+    // database that is behind (or new) is written to by the migration below: check it whole.
+    let version = inspect(&conn, &name)?;
+    let checked = version < super::migrations::SCHEMA_VERSION;
+    if checked {
+        super::migrations::quick_check(&conn, &name)?;
+    }
     if conn.is_readonly("main").map_err(|e| open_error(&name, e))? {
         return Err(Error::Database {
             path: name,
@@ -60,8 +76,10 @@ pub(crate) fn open_writer(path: &Path) -> Result<Connection> {
     }
     common_pragmas(&conn).map_err(|e| open_error(&name, e))?;
     writer_pragmas(&conn).map_err(|e| open_error(&name, e))?;
-    super::migrations::migrate(&mut conn, &name)?;
-    Ok(conn)
+    if version < super::migrations::SCHEMA_VERSION {
+        super::migrations::migrate(&mut conn, &name)?;
+    }
+    Ok((conn, checked))
 }
 
 /// Opens an in-memory database at the current schema (tests, throw-away plans).
@@ -79,7 +97,7 @@ pub(crate) fn open_reader(path: &Path) -> Result<Connection> {
     let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
     let conn = Connection::open_with_flags(path, flags).map_err(|e| open_error(&name, e))?;
     common_pragmas(&conn).map_err(|e| open_error(&name, e))?;
-    let version = super::migrations::check_version(&conn, &name)?;
+    let version = inspect(&conn, &name)?;
     if version < super::migrations::SCHEMA_VERSION {
         return Err(Error::Database {
             path: name,

@@ -61,7 +61,12 @@ pub fn migrate(conn: &mut Connection, path: &str) -> Result<u32> {
 pub fn migrate_to(conn: &mut Connection, path: &str, target: u32) -> Result<u32> {
     let found = check_version(conn, path)?;
     let target = target.min(SCHEMA_VERSION);
-    for m in MIGRATIONS.iter().filter(|m| m.version <= target) {
+    // Up to date: no write lock is taken, so opening a store never waits for another
+    // process's long write.
+    for m in MIGRATIONS
+        .iter()
+        .filter(|m| m.version <= target && m.version > found)
+    {
         let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
         let current = user_version(&tx)?;
         if current >= m.version {
@@ -93,6 +98,137 @@ pub fn check_version(conn: &Connection, path: &str) -> Result<u32> {
         });
     }
     Ok(found)
+}
+
+/// One schema object as `sqlite_master` lists it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct SchemaObject {
+    kind: String,
+    name: String,
+    sql: Option<String>,
+}
+
+fn schema_objects(conn: &Connection) -> rusqlite::Result<Vec<SchemaObject>> {
+    let mut st = conn.prepare("SELECT type, name, sql FROM sqlite_master ORDER BY type, name")?;
+    st.query_map([], |r| {
+        Ok(SchemaObject {
+            kind: r.get(0)?,
+            name: r.get(1)?,
+            sql: r.get(2)?,
+        })
+    })?
+    .collect()
+}
+
+/// `sqlite_master` of a database built by the migrations, at every version from 0 to
+/// [`SCHEMA_VERSION`] (built once, in memory).
+fn expected_schemas() -> Result<&'static [Vec<SchemaObject>]> {
+    use std::sync::OnceLock;
+    static SCHEMAS: OnceLock<Vec<Vec<SchemaObject>>> = OnceLock::new();
+    if let Some(s) = SCHEMAS.get() {
+        return Ok(s);
+    }
+    let mut conn = Connection::open_in_memory()?;
+    let mut out = vec![schema_objects(&conn)?];
+    for m in MIGRATIONS {
+        migrate_to(&mut conn, ":memory:", m.version)?;
+        out.push(schema_objects(&conn)?);
+    }
+    Ok(SCHEMAS.get_or_init(|| out))
+}
+
+/// Decides, reading only, whether a database is one this build may use, and returns its
+/// schema version. A database is ours when it is empty (version 0, no schema objects) or
+/// carries every table, index and trigger our migrations create at its version, exactly as
+/// they create them; anything else (another program's file, a dropped table, a newer
+/// version) is refused with the reason, and nothing
+/// has been written to it: call this before any pragma that writes (`journal_mode`).
+/// Everything is read in one read transaction, so a concurrent migration is seen whole.
+/// `PRAGMA quick_check`, which reads every page, is [`quick_check`], run before the first
+/// write.
+pub(crate) fn inspect(conn: &Connection, path: &str) -> Result<u32> {
+    let refuse = |message: String| Error::Database {
+        path: path.to_string(),
+        message,
+    };
+    let tx = conn.unchecked_transaction().map_err(|e| open_error(path, e))?;
+    let found = check_version(&tx, path)?;
+    let actual = schema_objects(&tx).map_err(|e| open_error(path, e))?;
+    let expected = expected_schemas()?
+        .get(found as usize)
+        .map_or(&[][..], Vec::as_slice);
+    if found == 0 && !actual.is_empty() {
+        let mut names: Vec<String> = actual
+            .iter()
+            .filter(|o| o.kind == "table")
+            .map(|o| format!("{:?}", o.name))
+            .collect();
+        if names.is_empty() {
+            names = actual.iter().map(|o| format!("{:?}", o.name)).collect();
+        }
+        let shown: Vec<&str> = names.iter().take(5).map(String::as_str).collect();
+        return Err(refuse(format!(
+            "not a trailprint database: it has no trailprint schema version but holds {} \
+             schema object(s) ({}{}); it was left untouched (use another --db)",
+            actual.len(),
+            shown.join(", "),
+            if names.len() > shown.len() { ", ..." } else { "" }
+        )));
+    }
+    for want in expected {
+        match actual
+            .iter()
+            .find(|o| o.kind == want.kind && o.name == want.name)
+        {
+            None => {
+                return Err(refuse(format!(
+                    "schema version {found} needs {} {:?}, which is missing: the database is \
+                     damaged or not trailprint's; it was left untouched",
+                    want.kind, want.name
+                )));
+            }
+            Some(have) if have.sql != want.sql => {
+                return Err(refuse(format!(
+                    "{} {:?} is not the one trailprint's schema version {found} creates: the \
+                     database is damaged or not trailprint's; it was left untouched",
+                    want.kind, want.name
+                )));
+            }
+            Some(_) => {}
+        }
+    }
+    // A read transaction: ending it writes nothing.
+    tx.rollback().map_err(|e| open_error(path, e))?;
+    Ok(found)
+}
+
+/// Runs `PRAGMA quick_check` (every page's b-tree structure, NOT NULL and CHECK
+/// constraints) and refuses a database that fails it, naming the first problems. Reads only.
+pub(crate) fn quick_check(conn: &Connection, path: &str) -> Result<()> {
+    // A page too broken to walk makes the pragma fail instead of reporting it.
+    let problems = conn
+        .prepare("PRAGMA quick_check(5)")
+        .and_then(|mut st| {
+            st.query_map([], |r| r.get::<_, String>(0))?
+                .collect::<rusqlite::Result<Vec<String>>>()
+        })
+        .or_else(|e| match e.sqlite_error_code() {
+            Some(rusqlite::ErrorCode::DatabaseCorrupt | rusqlite::ErrorCode::NotADatabase) => {
+                Ok(vec![e.to_string()])
+            }
+            _ => Err(open_error(path, e)),
+        })?;
+    if problems != ["ok"] {
+        return Err(Error::Database {
+            path: path.to_string(),
+            message: format!(
+                "the database is corrupt (PRAGMA quick_check: {}); nothing was written to it \
+                 (restore a backup, or export what still reads with another tool)",
+                problems.join("; ")
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Turns an SQLite error met while opening a database into a message that names the file

@@ -187,9 +187,11 @@ fn check_fingerprint(fp: &CollectedFingerprint) -> Result<()> {
         ));
     }
     for (ap, &rss) in &fp.rss {
-        if !rss.is_finite() || !(-150.0..=30.0).contains(&rss) {
+        if !crate::building::rss_ok(rss) {
             return Err(Error::InvalidRequest(format!(
-                "scan: RSS of {ap:?} must be a finite dBm value in [-150, 30], got {rss}"
+                "scan: RSS of {ap:?} must be a finite dBm value in [{}, {}], got {rss}",
+                crate::building::MIN_RSS_DBM,
+                crate::building::MAX_RSS_DBM
             )));
         }
     }
@@ -270,11 +272,28 @@ pub(super) fn append_in(
         _ => {}
     }
 
-    let seq: i64 = tx.query_row(
-        "SELECT coalesce(max(seq), 0) + 1 FROM session_events WHERE session_id = ?1",
-        [session_id],
-        |r| r.get(0),
-    )?;
+    // The log ends at `finish` or `abort`: nothing may follow (a bundle carrying events
+    // after its finish is refused here too). Only the last event needs looking at, since
+    // this rule keeps every earlier one from following an end.
+    let last: Option<(i64, String)> = tx
+        .prepare_cached(
+            "SELECT seq, kind FROM session_events WHERE session_id = ?1 ORDER BY seq DESC LIMIT 1",
+        )?
+        .query_row([session_id], |r| Ok((r.get(0)?, r.get(1)?)))
+        .optional()?;
+    if let Some((last_seq, kind)) = &last
+        && (kind == "finish" || kind == "abort")
+    {
+        return Err(Error::Session {
+            session: session_id,
+            message: format!(
+                "the session ended with {kind} at event {last_seq}: no more events are accepted \
+                 (got {})",
+                event.kind()
+            ),
+        });
+    }
+    let seq = last.map_or(0, |(s, _)| s) + 1;
     let payload = match event {
         SessionEvent::Scan(_) => "{}".to_string(),
         other => {

@@ -259,14 +259,17 @@ impl PropagationModel {
         (0..self.aps.len()).map(|a| self.mean_rss(a, p)).collect()
     }
 
-    /// One noisy measurement at `p`: mean plus noise, rounded to 0.01 dB, access points
-    /// below the threshold left out. Draws exactly one normal per access point.
+    /// One noisy measurement at `p`: mean plus noise, rounded to 0.01 dB, saturating at
+    /// 0 dBm (a receiver reports no more), access points below the threshold or below
+    /// -120 dBm left out: every value lies in the range building files accept (SPEC 7).
+    /// Draws exactly one normal per access point.
     pub fn measure<R: Rng>(&self, p: &Point, rng: &mut R) -> BTreeMap<String, f64> {
+        use crate::building::{MAX_RSS_DBM, MIN_RSS_DBM};
         let mut out = BTreeMap::new();
         for (i, a) in self.aps.iter().enumerate() {
             let v = self.mean_rss(i, p) + self.params.noise_sigma_db * normal(rng);
-            let v = (v * 100.0).round() / 100.0;
-            if v >= self.params.threshold_dbm {
+            let v = ((v * 100.0).round() / 100.0).min(MAX_RSS_DBM);
+            if v >= self.params.threshold_dbm && v >= MIN_RSS_DBM {
                 out.insert(a.id.clone(), v);
             }
         }
@@ -372,5 +375,31 @@ mod tests {
         let b = m.measure(&p, &mut stream_rng(1, 0));
         assert_eq!(a, b);
         assert_eq!(a.len(), 1);
+    }
+
+    #[test]
+    fn measurements_stay_in_the_rss_range_of_building_files() {
+        // An access point far louder than any real one, and a threshold below -120 dBm.
+        let params = PropagationParams {
+            threshold_dbm: -300.0,
+            ..PropagationParams::default()
+        };
+        let m = PropagationModel::new(
+            vec![AccessPoint {
+                id: "ap-01".into(),
+                pos: Point::new(0.0, 0.0, 0),
+                p0_dbm: 30.0,
+                exponent: 4.0,
+            }],
+            vec![],
+            &[0],
+            params,
+            3,
+        )
+        .expect("valid");
+        let near = m.measure(&Point::new(0.5, 0.0, 0), &mut stream_rng(1, 0));
+        assert_eq!(near.get("ap-01"), Some(&0.0), "saturates at 0 dBm");
+        let far = m.measure(&Point::new(1e6, 0.0, 0), &mut stream_rng(1, 0));
+        assert!(far.is_empty(), "below -120 dBm is not heard: {far:?}");
     }
 }

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::store_cli::open_store;
+use crate::store_cli::{open_store, printable};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -26,9 +26,12 @@ pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
         println!("no buildings (import one with `trailprint import FILE`)");
         return Ok(());
     }
-    let width = list
+    // Names are printed escaped: a name is data from a file, and one made of terminal
+    // escape sequences must not drive the terminal.
+    let names: Vec<String> = list.iter().map(|b| printable(&b.name)).collect();
+    let width = names
         .iter()
-        .map(|b| b.name.chars().count())
+        .map(|n| n.chars().count())
         .max()
         .unwrap_or(4)
         .max(4);
@@ -47,11 +50,11 @@ pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
         "sessions",
         "collected"
     );
-    for b in &list {
+    for (b, name) in list.iter().zip(&names) {
         println!(
             "{:>4}  {:<width$}  {:>6} {:>8} {:>6} {:>6} {:>6} {:>6} {:>5} {:>5} {:>8} {:>9}",
             b.id,
-            b.name,
+            name,
             b.floors,
             b.vertices,
             b.edges,

@@ -30,7 +30,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         });
         println!("{}", json_line(&out)?);
     } else {
-        println!("building        {}", b.name);
+        println!("building        {}", crate::store_cli::printable(&b.name));
         println!("sf2             {:.4} dB²", fit.kernel.sf2);
         println!("ell             {:.4} m", fit.kernel.ell);
         println!("sn2             {:.4} dB²", fit.kernel.sn2);

@@ -120,7 +120,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
                 prior.len()
             );
         }
-        println!("building      {}", b.name);
+        println!("building      {}", crate::store_cli::printable(&b.name));
         println!("algorithm     {}", r.algorithm);
         println!(
             "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",

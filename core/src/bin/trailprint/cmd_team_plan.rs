@@ -78,7 +78,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         });
         println!("{}", json_line(&out)?);
     } else {
-        println!("building        {}", b.name);
+        println!("building        {}", crate::store_cli::printable(&b.name));
         println!(
             "kernel          sf2={:.4} ell={:.4} sn2={:.4} ({source})",
             kernel.sf2, kernel.ell, kernel.sn2

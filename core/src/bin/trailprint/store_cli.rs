@@ -110,15 +110,45 @@ pub fn building_ref<'a>(store: &Store, spec: &'a str) -> Result<BuildingRef<'a>>
     }
 }
 
-/// Writes `text` to `path` (`-`: standard output) so that a kill never leaves half a file:
-/// a temporary file beside it, flushed to disk, then renamed over it.
+/// Writes `text` to `path` (`-`: standard output), the one writer of every `-o` option.
+///
+/// A regular file (or a new one) is replaced whole, so a kill never leaves half a file: the
+/// text goes to a temporary file beside it, created with `create_new` under a random name
+/// (a file or symlink planted under a predictable name cannot be written through),
+/// flushed to disk and renamed over the target, which keeps its permissions. A target that
+/// exists and is not a regular file (a FIFO, `/dev/null`, a terminal) is written straight
+/// into: replacing it with a regular file would break whatever reads it.
 pub fn write_output(path: &Path, text: &str) -> Result<()> {
+    use std::fs::OpenOptions;
     if path == Path::new("-") {
         let mut out = std::io::stdout().lock();
         return out
             .write_all(text.as_bytes())
             .and_then(|()| out.flush())
             .map_err(|e| Error::io("<stdout>", e));
+    }
+    // Follows a symlink: a link to a FIFO is written into like the FIFO.
+    let existing = std::fs::metadata(path).ok();
+    if let Some(meta) = &existing
+        && !meta.is_file()
+    {
+        if meta.is_dir() {
+            return Err(Error::io(
+                path,
+                std::io::Error::new(
+                    std::io::ErrorKind::IsADirectory,
+                    "is a directory, not a file to write",
+                ),
+            ));
+        }
+        let mut f = OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| Error::io(path, e))?;
+        return f
+            .write_all(text.as_bytes())
+            .and_then(|()| f.flush())
+            .map_err(|e| Error::io(path, e));
     }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -128,17 +158,61 @@ pub fn write_output(path: &Path, text: &str) -> Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "output".into());
-    let tmp = dir.join(format!(".{file_name}.{}.tmp", std::process::id()));
+    let (tmp, mut f) = create_temporary(&dir, &file_name).map_err(|e| Error::io(path, e))?;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
         f.write_all(text.as_bytes())?;
+        if let Some(meta) = &existing {
+            f.set_permissions(meta.permissions())?;
+        }
         f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        drop(f);
+        std::fs::rename(&tmp, path)?;
+        // The rename itself reaches the disk with the directory (best effort: some file
+        // systems cannot sync a directory).
+        if let Ok(d) = std::fs::File::open(&dir) {
+            let _ = d.sync_all();
+        }
+        Ok::<(), std::io::Error>(())
     })();
     result.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         Error::io(path, e)
     })
+}
+
+/// A new file `.<name>.<random>.tmp` in `dir`, created with `create_new` (never an existing
+/// file, never through a symlink). The random part is an identifier, not a modelling choice,
+/// so it comes from the operating system's entropy rather than a seed.
+fn create_temporary(dir: &Path, name: &str) -> std::io::Result<(PathBuf, std::fs::File)> {
+    use rand::RngExt;
+    let mut rng = rand::rng();
+    let mut last = None;
+    for _ in 0..16 {
+        let tag: u64 = rng.random();
+        let tmp = dir.join(format!(".{name}.{tag:016x}.tmp"));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("no free temporary file name")))
+}
+
+/// A name from the database (or a file) made safe to print on a terminal: control
+/// characters, escape sequences and invisible format characters (bidirectional overrides,
+/// zero-width characters) are written as Rust escapes (`\u{1b}`), as `{:?}` does, so a
+/// building named with terminal escape sequences cannot clear the screen or hide text.
+/// Quotes are kept as they are (the table of `trailprint buildings` prints names bare).
+pub fn printable(name: &str) -> String {
+    name.escape_debug()
+        .to_string()
+        .replace("\\\"", "\"")
+        .replace("\\'", "'")
 }
 
 /// Everything collected so far in `spec`'s building (nothing for a building read from a
