@@ -17,6 +17,7 @@ pub mod building;
 pub mod error;
 pub mod eval;
 pub mod experiment;
+pub mod floorplan;
 pub mod gp;
 pub mod plan;
 pub mod render;

@@ -438,6 +438,8 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
             test_points: lists.remove("test_points").unwrap_or_default(),
             dense_survey: lists.remove("dense_survey").unwrap_or_default(),
             kernel,
+            geo: None,
+            outlines: Vec::new(),
         };
         Building::from_file(file, &format!("{db}: building {name:?}"))
     })
