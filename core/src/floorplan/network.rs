@@ -234,6 +234,7 @@ pub(crate) fn build(
     let mut net = Net::default();
     let mut spaces_with_vertices = BTreeSet::new();
     let mut doors_used = 0usize;
+    let mut door_touched = vec![false; doors.len()];
     let bboxes: Vec<Option<Rect<f64>>> = spaces.iter().map(|s| s.polygon.bounding_rect()).collect();
 
     for floor in &floors {
@@ -327,6 +328,7 @@ pub(crate) fn build(
             if touching.is_empty() {
                 continue;
             }
+            door_touched[di] = true;
             touching.sort_by(|a, b| a.0.total_cmp(&b.0));
             let nearest = touching[0].1;
             let pos = if spaces[nearest].polygon.contains(&Point(d.pos)) && touching.len() == 1 {
@@ -435,6 +437,15 @@ pub(crate) fn build(
                     }
                 }
             }
+        }
+    }
+
+    for (d, touched) in doors.iter().zip(&door_touched) {
+        if !touched {
+            warnings.add(
+                "doors on the outline of no walkable space (ignored)",
+                d.source.clone(),
+            );
         }
     }
 

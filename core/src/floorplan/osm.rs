@@ -580,8 +580,13 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Plan> {
                 });
             }
             Role::Outline => {
+                // A building outline without a level stands on every floor.
+                let on: Vec<i64> = match &r.levels {
+                    Some(_) => levels.clone(),
+                    None => floors.iter().map(|f| f.id).collect(),
+                };
                 for poly in shapes.polygons(&r.geometry, &r.id) {
-                    for &f in &levels {
+                    for &f in &on {
                         outlines.push((f, poly.clone()));
                     }
                 }
