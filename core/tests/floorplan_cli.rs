@@ -107,54 +107,7 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
     assert!(err.contains("[0].floor") && err.contains("floor 7"), "{err}");
     assert_eq!(Store::open(db).unwrap().get_building("Office").unwrap().pilot.len(), 6);
 
-    // Plan, simulate, render.
-    let mut args = vec!["plan", "--building", "Office", "--time-limit", "0.5", "--json"];
-    args.extend(route);
-    let plan: serde_json::Value = serde_json::from_str(ok(db, &args).trim()).unwrap();
-    assert!(plan["walk"].as_array().unwrap().len() > 2, "{plan}");
-    assert!(plan["length_m"].as_f64().unwrap() <= 60.0 + 1e-9);
-    let mut args = vec!["simulate", "--building", "Office", "--time-limit", "0.5", "--seed", "3", "--json"];
-    args.extend(route);
-    let sim = ok(db, &args);
-    assert!(sim.lines().last().unwrap().starts_with('{'), "{sim}");
-    let svg = dir.path().join("office.svg");
-    ok(db, &["render", "--building", "Office", "-o", svg.to_str().unwrap()]);
-    let svg = std::fs::read_to_string(svg).unwrap();
-    for class in ["outline outline-room", "outline outline-corridor", "outline outline-wall", "class=\"edge\""] {
-        assert!(svg.contains(class), "{class}");
-    }
-    // The outlines are drawn before (under) the graph.
-    assert!(svg.find("outline outline-room").unwrap() < svg.find("class=\"edge\"").unwrap());
-
-    // Fingerprints out: UJIIndoorLoc columns and JSON lines read back to the same scans.
-    let store = Store::open(db).unwrap();
-    let b = store.get_building("Office").unwrap();
-    let collected = store.list_collected("Office", None).unwrap();
-    assert!(!collected.is_empty(), "the simulated session collected fingerprints");
-    let expected = trailprint::radiomap::scan_rows(&b, &collected, &Default::default());
-    let csv = dir.path().join("scans.csv");
-    ok(db, &["export", "Office", "--fingerprints", "-o", csv.to_str().unwrap()]);
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let header = text.lines().next().unwrap();
-    assert!(header.starts_with("WAP001,WAP002,WAP003,LONGITUDE,LATITUDE,FLOOR,BUILDINGID,SPACEID,RELATIVEPOSITION,USERID,PHONEID,TIMESTAMP"), "{header}");
-    let waps = std::fs::read_to_string(dir.path().join("scans.waps.csv")).unwrap();
-    assert_eq!(waps, "WAP,name\r\nWAP001,ap-a\r\nWAP002,ap-b\r\nWAP003,ap-c\r\n");
-    let back = read_uji_csv(&text, Some(&waps), "scans.csv").unwrap();
-    assert_eq!(back.len(), expected.len());
-    assert_eq!(back.len(), 6 + collected.len());
-    for (a, e) in back.iter().zip(&expected) {
-        same(a, e);
-    }
-    // "Not heard" is 100 in the WAP columns.
-    let jsonl_path = dir.path().join("scans.jsonl");
-    ok(db, &["export", "Office", "--fingerprints", "--format", "jsonl", "-o", jsonl_path.to_str().unwrap()]);
-    let back = read_jsonl(&std::fs::read_to_string(&jsonl_path).unwrap(), "scans.jsonl").unwrap();
-    assert_eq!(back.len(), expected.len());
-    for (a, e) in back.iter().zip(&expected) {
-        same(a, e);
-    }
-
-    // The radio map: every access point on a grid over the walkable outlines.
+    // The radio map of the pilot data: every access point on a grid over the walkable outlines.
     let map_csv = dir.path().join("map.csv");
     ok(db, &["export", "Office", "--radio-map", "--grid", "2", "-o", map_csv.to_str().unwrap()]);
     let text = std::fs::read_to_string(&map_csv).unwrap();
@@ -184,6 +137,66 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
     let near = floor0.iter().min_by(|a, b| d(a).total_cmp(&d(b))).unwrap();
     let far = floor0.iter().max_by(|a, b| d(a).total_cmp(&d(b))).unwrap();
     assert!(ap_a(near) > ap_a(far) + 3.0, "{} vs {}", ap_a(near), ap_a(far));
+
+    // Plan, simulate, render.
+    let mut args = vec!["plan", "--building", "Office", "--time-limit", "0.5", "--json"];
+    args.extend(route);
+    let plan: serde_json::Value = serde_json::from_str(ok(db, &args).trim()).unwrap();
+    assert!(plan["walk"].as_array().unwrap().len() > 2, "{plan}");
+    assert!(plan["length_m"].as_f64().unwrap() <= 60.0 + 1e-9);
+    let mut args = vec!["simulate", "--building", "Office", "--surveyor", "human", "--time-limit", "0.5", "--seed", "3", "--json"];
+    args.extend(route);
+    let sim = ok(db, &args);
+    assert!(sim.lines().last().unwrap().starts_with('{'), "{sim}");
+    let svg = dir.path().join("office.svg");
+    ok(db, &["render", "--building", "Office", "-o", svg.to_str().unwrap()]);
+    let svg = std::fs::read_to_string(svg).unwrap();
+    for class in ["outline outline-room", "outline outline-corridor", "outline outline-wall", "class=\"edge\""] {
+        assert!(svg.contains(class), "{class}");
+    }
+    // The outlines are drawn before (under) the graph.
+    assert!(svg.find("outline outline-room").unwrap() < svg.find("class=\"edge\"").unwrap());
+
+    // Fingerprints out: UJIIndoorLoc columns and JSON lines read back to the same scans.
+    let store = Store::open(db).unwrap();
+    let b = store.get_building("Office").unwrap();
+    let collected = store.list_collected("Office", None).unwrap();
+    assert!(!collected.is_empty(), "the simulated session collected fingerprints");
+    let expected = trailprint::radiomap::scan_rows(&b, &collected, &Default::default());
+    let csv = dir.path().join("scans.csv");
+    ok(db, &["export", "Office", "--fingerprints", "-o", csv.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header = text.lines().next().unwrap();
+    assert!(header.starts_with("WAP001,WAP002,WAP003,WAP004,"), "{header}");
+    assert!(
+        header.contains(",LONGITUDE,LATITUDE,FLOOR,BUILDINGID,SPACEID,RELATIVEPOSITION,USERID,PHONEID,TIMESTAMP,"),
+        "{header}"
+    );
+    let waps = std::fs::read_to_string(dir.path().join("scans.waps.csv")).unwrap();
+    assert!(waps.starts_with("WAP,name\r\nWAP001,ap-a\r\nWAP002,ap-b\r\nWAP003,ap-c\r\n"), "{waps}");
+    // "Not heard" is UJIIndoorLoc's 100: the pilot rows did not hear the simulated APs.
+    assert!(text.lines().nth(1).unwrap().split(',').nth(3) == Some("100.0"));
+    let back = read_uji_csv(&text, Some(&waps), "scans.csv").unwrap();
+    assert_eq!(back.len(), expected.len());
+    assert_eq!(back.len(), 6 + collected.len());
+    for (a, e) in back.iter().zip(&expected) {
+        same(a, e);
+    }
+    let jsonl_path = dir.path().join("scans.jsonl");
+    ok(db, &["export", "Office", "--fingerprints", "--format", "jsonl", "-o", jsonl_path.to_str().unwrap()]);
+    let back = read_jsonl(&std::fs::read_to_string(&jsonl_path).unwrap(), "scans.jsonl").unwrap();
+    assert_eq!(back.len(), expected.len());
+    for (a, e) in back.iter().zip(&expected) {
+        same(a, e);
+    }
+
+    // After the session, the radio map holds its access points too.
+    let map_csv = dir.path().join("map2.csv");
+    ok(db, &["export", "Office", "--radio-map", "--grid", "2", "-o", map_csv.to_str().unwrap()]);
+    let n_aps = waps.lines().count() - 1;
+    assert!(n_aps > 3);
+    let rows = std::fs::read_to_string(&map_csv).unwrap().lines().count() - 1;
+    assert_eq!(rows % n_aps, 0);
 }
 
 #[test]
