@@ -137,13 +137,15 @@ fn check_walkable(b: &Building) {
     }
 }
 
-/// The vertex at `c` on `floor` (within 2 cm) with this label.
+/// The vertex at `c` on `floor` with this label: within 2 cm for a door (at the door
+/// node), within 0.1 m for an opening (the middle of a shared boundary, sampled every 0.1 m).
 fn vertex_at(b: &Building, floor: i64, c: Coord<f64>, label: &str) -> usize {
+    let tol = if label == "opening" { 0.1 } else { 0.02 };
     (0..b.len())
         .find(|&v| {
             b.vertices[v].pos.floor == floor
                 && b.vertices[v].label.as_deref() == Some(label)
-                && Euclidean.distance(&Point(pos(b, v)), &Point(c)) <= 0.02
+                && Euclidean.distance(&Point(pos(b, v)), &Point(c)) <= tol
         })
         .unwrap_or_else(|| panic!("no {label} vertex at ({:.2}, {:.2}) on floor {floor}", c.x, c.y))
 }
@@ -201,17 +203,19 @@ fn office_on_two_levels_is_walkable_and_joined() {
         let n = b.vertices.iter().filter(|v| v.label.as_deref() == Some(room)).count();
         assert!(n >= 4, "{room}: {n} vertices");
     }
-    // The 2.4 m corridor arms get one row down their middle.
-    let corridor0: Vec<_> = b
+    // The 2.4 m arm of the corridor gets one row of grid vertices along it (where the
+    // L's grid puts it, at least 0.3 m from both walls), 2 m apart.
+    let (lo, hi) = (at(&b, 15.0, 0.0).y, at(&b, 15.0, 2.4).y);
+    let mut ys: Vec<f64> = b
         .vertices
         .iter()
-        .filter(|v| v.label.as_deref() == Some("Corridor 0"))
+        .filter(|v| v.label.as_deref() == Some("Corridor 0") && v.pos.x > at(&b, 3.0, 0.0).x)
+        .map(|v| v.pos.y)
         .collect();
-    let mid_long = at(&b, 15.0, 1.2).y;
-    assert!(
-        corridor0.iter().filter(|v| (v.pos.y - mid_long).abs() < 0.05).count() >= 10,
-        "the long arm's centre row"
-    );
+    assert!(ys.len() >= 13, "{ys:?}");
+    ys.sort_by(f64::total_cmp);
+    assert!(ys[ys.len() - 1] - ys[0] < 1e-3, "one row: {ys:?}");
+    assert!(ys[0] - lo >= 0.3 && hi - ys[0] >= 0.3, "{ys:?} in [{lo}, {hi}]");
 
     // Floors: the stairwell (8 m per storey) and the elevator (15 m + 3 m per storey).
     let mut v = vertical_lengths(&b);
