@@ -295,7 +295,12 @@ pub(crate) fn build(
                     .interior_point()
                     .map(|p| p.0)
                     .unwrap_or_else(|| poly.exterior().0[0]);
-                mine.push(net.vertex(f, p, new_id(&mut k), sp.name.clone(), what.clone()));
+                // A shaft's vertex says what it is (its name stays on the outline).
+                let label = match sp.kind {
+                    SpaceKind::Elevator | SpaceKind::Stairs => Some(sp.kind.as_str().to_string()),
+                    _ => sp.name.clone(),
+                };
+                mine.push(net.vertex(f, p, new_id(&mut k), label, what.clone()));
             } else {
                 fill_gaps(
                     &mut net,
