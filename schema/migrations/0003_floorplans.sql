@@ -6,6 +6,9 @@
 -- as one JSON array per building (the `outlines` list of the building file) rather than as
 -- rows. A building from a plain file has no row here.
 --
+-- WITHOUT ROWID: the cascade from `buildings` looks the row up by `building_id` itself
+-- (core/tests/store_api.rs checks every foreign key's lookup).
+--
 -- Lesson: a new table instead of new columns on `buildings`, so that the rows of every
 -- earlier database stay exactly as they were (core/tests/store_migrations.rs compares them).
 
@@ -15,4 +18,4 @@ CREATE TABLE building_floorplans (
     geo_lon     REAL CHECK (geo_lon IS NULL OR geo_lon BETWEEN -180 AND 180),
     outlines    TEXT NOT NULL DEFAULT '[]' CHECK (json_valid(outlines) AND json_type(outlines) = 'array'),
     CHECK ((geo_lat IS NULL) = (geo_lon IS NULL))
-);
+) WITHOUT ROWID;
