@@ -112,7 +112,7 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
     ok(db, &["export", "Office", "--radio-map", "--grid", "2", "-o", map_csv.to_str().unwrap()]);
     let text = std::fs::read_to_string(&map_csv).unwrap();
     let rows: Vec<&str> = text.lines().skip(1).collect();
-    assert!(!rows.is_empty() && rows.len() % 3 == 0, "{} rows", rows.len());
+    assert!(!rows.is_empty() && rows.len().is_multiple_of(3), "{} rows", rows.len());
     for r in &rows {
         let f: Vec<&str> = r.split(',').collect();
         let (mean, sd): (f64, f64) = (f[6].parse().unwrap(), f[7].parse().unwrap());

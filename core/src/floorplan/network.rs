@@ -616,7 +616,7 @@ pub(crate) fn build(
             spaces: what,
         });
     }
-    dropped.sort_by(|a, b| b.vertices.cmp(&a.vertices));
+    dropped.sort_by_key(|d| std::cmp::Reverse(d.vertices));
     let kept: HashSet<usize> = comps.get(keep).map(|m| m.iter().copied().collect()).unwrap_or_default();
 
     // 6. The building file.
