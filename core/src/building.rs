@@ -161,6 +161,65 @@ impl Fingerprint {
     }
 }
 
+/// Largest coordinate magnitude of an outline point, metres (SPEC 7: |x|, |y| <= 1e6).
+pub const MAX_COORDINATE_M: f64 = 1e6;
+
+/// WGS84 position of the local origin (SPEC 7 `geo`): `x` points east and `y` north, in
+/// metres on a local tangent plane. Buildings made from floor plans carry it so that exports
+/// can give longitude and latitude.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GeoOrigin {
+    /// Latitude, degrees north, in [-90, 90].
+    pub lat: f64,
+    /// Longitude, degrees east, in [-180, 180].
+    pub lon: f64,
+}
+
+/// What an outline outlines (SPEC 7). `room`, `corridor` and `area` are walkable spaces,
+/// `wall` is an open line, `building` the building's footprint or a level's outline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutlineKind {
+    Room,
+    Corridor,
+    Area,
+    Wall,
+    Building,
+}
+
+impl OutlineKind {
+    /// Whether the kind is a walkable space (room, corridor, area).
+    pub fn is_walkable(self) -> bool {
+        matches!(self, OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area)
+    }
+
+    /// The name used in the file.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OutlineKind::Room => "room",
+            OutlineKind::Corridor => "corridor",
+            OutlineKind::Area => "area",
+            OutlineKind::Wall => "wall",
+            OutlineKind::Building => "building",
+        }
+    }
+}
+
+/// A polygon (closed ring, first point not repeated) or, for `wall`, an open line, kept from
+/// a floor plan for drawing. Never used for planning.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Outline {
+    #[serde(default)]
+    pub floor: i64,
+    pub kind: OutlineKind,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// `[x, y]` in metres.
+    pub points: Vec<[f64; 2]>,
+}
+
 /// The JSON document `survey-building/1`, field for field. Records are JSON objects and
 /// optional fields are absent or a value, never `null` (the `shape` helpers).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -202,6 +261,18 @@ pub struct BuildingFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub kernel: Option<Kernel>,
+    #[serde(
+        default,
+        deserialize_with = "shape::some_object",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub geo: Option<GeoOrigin>,
+    #[serde(
+        default,
+        deserialize_with = "shape::objects",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub outlines: Vec<Outline>,
 }
 
 impl BuildingFile {
@@ -281,6 +352,10 @@ pub struct Building {
     pub test_points: Vec<Fingerprint>,
     pub dense_survey: Vec<Fingerprint>,
     pub kernel: Option<Kernel>,
+    /// WGS84 position of the local origin, for buildings made from floor plans.
+    pub geo: Option<GeoOrigin>,
+    /// Floor-plan outlines, drawn under the graph; never used for planning.
+    pub outlines: Vec<Outline>,
     index: HashMap<String, usize>,
     /// `adjacency[v]`: (neighbour, edge index), sorted by neighbour.
     adjacency: Vec<Vec<(usize, usize)>>,
@@ -572,6 +647,24 @@ impl Building {
             }
         }
 
+        if let Some(g) = &file.geo {
+            if !(g.lat.is_finite() && (-90.0..=90.0).contains(&g.lat)) {
+                return Err(bad(
+                    "geo.lat".into(),
+                    format!("latitude must be in [-90, 90] degrees, got {}", g.lat),
+                ));
+            }
+            if !(g.lon.is_finite() && (-180.0..=180.0).contains(&g.lon)) {
+                return Err(bad(
+                    "geo.lon".into(),
+                    format!("longitude must be in [-180, 180] degrees, got {}", g.lon),
+                ));
+            }
+        }
+        for (i, o) in file.outlines.iter().enumerate() {
+            validate_outline(i, o, &floor_ok).map_err(|(path, msg)| bad(path, msg))?;
+        }
+
         Ok(Building {
             name: file.name,
             floors,
@@ -582,6 +675,8 @@ impl Building {
             test_points: file.test_points,
             dense_survey: file.dense_survey,
             kernel: file.kernel,
+            geo: file.geo,
+            outlines: file.outlines,
             index,
             adjacency,
         })
@@ -631,6 +726,8 @@ impl Building {
             test_points: self.test_points.clone(),
             dense_survey: self.dense_survey.clone(),
             kernel: self.kernel,
+            geo: self.geo,
+            outlines: self.outlines.clone(),
         }
     }
 
@@ -751,6 +848,71 @@ fn coordinate_ok(v: f64) -> bool {
 /// rule for building files, scans and bundles.
 pub fn rss_ok(rss: f64) -> bool {
     rss.is_finite() && (MIN_RSS_DBM..=MAX_RSS_DBM).contains(&rss)
+}
+
+/// Checks one outline of SPEC 7; the error is `(JSON path, message)`.
+fn validate_outline(
+    i: usize,
+    o: &Outline,
+    floor_ok: &dyn Fn(i64) -> bool,
+) -> std::result::Result<(), (String, String)> {
+    let what = match &o.name {
+        Some(n) => format!("{} outline {n:?}", o.kind.as_str()),
+        None => format!("{} outline", o.kind.as_str()),
+    };
+    if !floor_ok(o.floor) {
+        return Err((
+            format!("outlines[{i}].floor"),
+            format!("{what} is on floor {}, which is not in `floors`", o.floor),
+        ));
+    }
+    for (j, p) in o.points.iter().enumerate() {
+        for (k, name) in ["x", "y"].iter().enumerate() {
+            let v = p[k];
+            if !v.is_finite() || v.abs() > MAX_COORDINATE_M {
+                return Err((
+                    format!("outlines[{i}].points[{j}][{k}]"),
+                    format!(
+                        "{what}: {name} must be a finite number of metres with |{name}| <= {MAX_COORDINATE_M}, got {v}"
+                    ),
+                ));
+            }
+        }
+    }
+    if o.kind == OutlineKind::Wall {
+        if o.points.len() < 2 {
+            return Err((
+                format!("outlines[{i}].points"),
+                format!("{what} is a line and needs at least 2 points, got {}", o.points.len()),
+            ));
+        }
+        return Ok(());
+    }
+    let mut distinct: Vec<[u64; 2]> = o
+        .points
+        .iter()
+        .map(|p| [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()])
+        .collect();
+    if o.points.len() >= 2 && distinct.first() == distinct.last() {
+        return Err((
+            format!("outlines[{i}].points"),
+            format!(
+                "{what}: the last point repeats the first; rings are closed implicitly (leave the repeat out)"
+            ),
+        ));
+    }
+    distinct.sort_unstable();
+    distinct.dedup();
+    if distinct.len() < 3 {
+        return Err((
+            format!("outlines[{i}].points"),
+            format!(
+                "{what} is a closed ring and needs at least 3 distinct points, got {}",
+                distinct.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Connected components as lists of vertex indices, each list sorted, largest first.

@@ -7,7 +7,8 @@
 //! information utility that the planners maximise ([`utility`]).
 //!
 //! Around the planner: synthetic buildings and their radio world ([`synth`]), the
-//! localization evaluation of SPEC section 5 ([`eval`]), the paper's experiment
+//! localization evaluation of SPEC section 5 ([`eval`]), floor plans in ([`floorplan`]) and
+//! radio maps out ([`radiomap`]), the paper's experiment
 //! ([`experiment`]) and SVG drawings ([`render`]).
 //! Everything the phone keeps lives in one SQLite file ([`store`]).
 //!
@@ -17,8 +18,10 @@ pub mod building;
 pub mod error;
 pub mod eval;
 pub mod experiment;
+pub mod floorplan;
 pub mod gp;
 pub mod plan;
+pub mod radiomap;
 pub mod render;
 pub mod samples;
 pub mod session;

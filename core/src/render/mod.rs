@@ -114,6 +114,57 @@ fn viridis(t: f64) -> String {
     )
 }
 
+/// The floor-plan outlines of one floor: building footprints, then walkable spaces (filled
+/// by kind), then walls; each element has the class `outline outline-<kind>`.
+fn draw_outlines(
+    s: &mut String,
+    building: &Building,
+    floor: i64,
+    px: &dyn Fn(f64) -> f64,
+    py: &dyn Fn(f64) -> f64,
+) {
+    use crate::building::OutlineKind;
+    let order = |k: OutlineKind| match k {
+        OutlineKind::Building => 0,
+        OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area => 1,
+        OutlineKind::Wall => 2,
+    };
+    let mut list: Vec<_> = building
+        .outlines
+        .iter()
+        .filter(|o| o.floor == floor)
+        .collect();
+    if list.is_empty() {
+        return;
+    }
+    list.sort_by_key(|o| order(o.kind));
+    let _ = writeln!(s, r#"<g class="outlines">"#);
+    for o in list {
+        let pts: Vec<String> = o
+            .points
+            .iter()
+            .map(|p| format!("{:.1},{:.1}", px(p[0]), py(p[1])))
+            .collect();
+        let tag = if o.kind == OutlineKind::Wall {
+            "polyline"
+        } else {
+            "polygon"
+        };
+        let title = o
+            .name
+            .as_ref()
+            .map(|n| format!("<title>{}</title>", esc(n)))
+            .unwrap_or_default();
+        let _ = writeln!(
+            s,
+            r#"<{tag} class="outline outline-{}" points="{}">{title}</{tag}>"#,
+            o.kind.as_str(),
+            pts.join(" ")
+        );
+    }
+    let _ = writeln!(s, "</g>");
+}
+
 /// Renders the building and scene as one SVG document.
 pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -> Result<String> {
     building.check_walk(&scene.walk)?;
@@ -133,6 +184,15 @@ pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -
         y0 = y0.min(v.pos.y - pad);
         x1 = x1.max(v.pos.x + pad);
         y1 = y1.max(v.pos.y + pad);
+    }
+    // Floor-plan outlines widen the area (a building outline around the graph).
+    for o in &building.outlines {
+        for p in &o.points {
+            x0 = x0.min(p[0] - 0.5);
+            y0 = y0.min(p[1] - 0.5);
+            x1 = x1.max(p[0] + 0.5);
+            y1 = y1.max(p[1] + 0.5);
+        }
     }
     let (w_m, h_m) = (x1 - x0, y1 - y0);
     let scale = match options.scale_px_per_m {
@@ -189,6 +249,11 @@ pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -
          .end{{fill:#000;stroke:#fff}}\
          .label{{font-size:9px;fill:#222}}\
          .title{{font-size:15px;font-weight:bold;fill:#111}}\
+         .outline{{stroke:#8a8f98;stroke-width:1}}\
+         .outline-building{{fill:#f0f0f0}}\
+         .outline-room{{fill:#e8eef7}}\
+         .outline-corridor,.outline-area{{fill:#fbf6e6}}\
+         .outline-wall{{fill:none;stroke:#3c3f44;stroke-width:2.5}}\
          </style></defs>"
     );
     let _ = writeln!(
@@ -212,6 +277,9 @@ pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -
             top + 18.0,
             esc(&title)
         );
+
+        // Floor-plan outlines first, under the heat map and the graph.
+        draw_outlines(&mut s, building, floor.id, &px, &py);
 
         if let Some((grid, sd, max)) = &heat {
             let cell = options.grid_step_m * scale;

@@ -183,6 +183,7 @@ pub(super) fn import_in(
     )?;
     let id = tx.last_insert_rowid();
     row();
+    super::floorplans::save(tx, id, b)?;
 
     {
         let mut st = tx.prepare(
@@ -428,6 +429,7 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
             (Some(sf2), Some(ell), Some(sn2)) => Some(Kernel::new(sf2, ell, sn2)),
             _ => None,
         };
+        let (geo, outlines) = super::floorplans::load(conn, id, db)?;
         let file = BuildingFile {
             format: FORMAT.to_string(),
             name: name.clone(),
@@ -438,6 +440,8 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
             test_points: lists.remove("test_points").unwrap_or_default(),
             dense_survey: lists.remove("dense_survey").unwrap_or_default(),
             kernel,
+            geo,
+            outlines,
         };
         Building::from_file(file, &format!("{db}: building {name:?}"))
     })

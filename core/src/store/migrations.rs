@@ -36,6 +36,11 @@ pub const MIGRATIONS: &[Migration] = &[
         name: "0002_bundles",
         sql: include_str!("../../../schema/migrations/0002_bundles.sql"),
     },
+    Migration {
+        version: 3,
+        name: "0003_floorplans",
+        sql: include_str!("../../../schema/migrations/0003_floorplans.sql"),
+    },
 ];
 
 /// The schema version this build writes: the number of the last migration.

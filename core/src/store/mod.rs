@@ -19,6 +19,7 @@ mod bundles;
 mod conn;
 mod export;
 mod fits;
+mod floorplans;
 pub mod migrations;
 mod plans;
 mod sessions;
@@ -246,6 +247,19 @@ impl Store {
         check: impl FnOnce(&BuildingInfo) -> Result<()>,
     ) -> Result<BuildingInfo> {
         buildings::delete(&mut *self.lock_write()?, building.into(), check)
+    }
+
+    /// Appends pilot fingerprints to a building (a floor-plan import has none), checked as
+    /// an import checks them; all or nothing. `origin` names the pilot file in errors.
+    /// Returns how many pilot fingerprints the building has now.
+    pub fn add_pilot<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        pilot: &[crate::building::Fingerprint],
+        origin: &str,
+    ) -> Result<usize> {
+        let db = self.name();
+        floorplans::add_pilot(&mut self.lock(), building.into(), pilot, origin, &db)
     }
 
     // ---- fits ----

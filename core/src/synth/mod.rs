@@ -505,6 +505,8 @@ pub fn generate(params: &SynthParams) -> Result<SyntheticBuilding> {
         test_points,
         dense_survey: dense,
         kernel: None,
+        geo: None,
+        outlines: Vec::new(),
     };
     Ok(SyntheticBuilding { file, model })
 }

@@ -1,16 +1,32 @@
-//! `trailprint export NAME -o FILE`: a building back to survey-building/1, or its collected
-//! fingerprints as CSV or JSON.
+//! `trailprint export NAME -o FILE`: a building back to survey-building/1, its collected
+//! fingerprints as CSV or JSON, every scan in the layout positioning engines read
+//! (`--fingerprints`, UJIIndoorLoc or JSON lines), or the radio map (`--radio-map`).
 
 use std::path::{Path, PathBuf};
 
-use trailprint::store::{collected_csv, collected_json};
+use trailprint::radiomap::{
+    SessionPeople, jsonl, radio_map, radio_map_csv, radio_map_geojson, scan_rows, uji_csv,
+    walkable_grid,
+};
+use trailprint::store::{BuildingRef, Store, collected_csv, collected_json};
+use trailprint::{Building, Result};
 
+use crate::opts::KernelOpts;
 use crate::store_cli::{building_ref, is_file_spec, load_building, open_store, write_output};
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum Collected {
     Csv,
     Json,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ScanFormat {
+    /// The UJIIndoorLoc columns (WAPnnn, LONGITUDE, LATITUDE, FLOOR, ...), plus a
+    /// `FILE.waps.csv` table of the access point names
+    Uji,
+    /// One JSON object per scan and line
+    Jsonl,
 }
 
 #[derive(clap::Args)]
@@ -22,14 +38,50 @@ pub struct Args {
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
     /// Export the fingerprints collected in survey sessions instead of the building
-    #[arg(long, value_name = "FORMAT")]
+    #[arg(long, value_name = "FORMAT", conflicts_with_all = ["fingerprints", "radio_map"])]
     collected: Option<Collected>,
-    /// With --collected: only this session
-    #[arg(long, value_name = "ID", requires = "collected")]
+    /// With --collected or --fingerprints: only this session
+    #[arg(long, value_name = "ID")]
     session: Option<i64>,
+    /// Export every scan (pilot data and sessions), one row each, for positioning engines
+    #[arg(long, conflicts_with = "radio_map")]
+    fingerprints: bool,
+    /// With --fingerprints: the layout
+    #[arg(long, value_enum, default_value = "uji", requires = "fingerprints")]
+    format: ScanFormat,
+    /// Export the predicted mean and standard deviation of every access point's RSS on a
+    /// grid over the walkable space (FILE.csv, or FILE.geojson for buildings with `geo`)
+    #[arg(long)]
+    radio_map: bool,
+    /// With --radio-map: grid spacing, metres
+    #[arg(long, default_value_t = 1.0, value_name = "M", requires = "radio_map")]
+    grid: f64,
+    #[command(flatten)]
+    kernel: KernelOpts,
 }
 
-pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
+/// Surveyor name and device of each session of a stored building.
+fn people(store: &Store, building_id: i64) -> Result<SessionPeople> {
+    store.with_connection(|c| {
+        let mut st = c.prepare(
+            "SELECT id, surveyor_name, device FROM survey_sessions WHERE building_id = ?1",
+        )?;
+        let rows = st
+            .query_map([building_id], |r| Ok((r.get(0)?, (r.get(1)?, r.get(2)?))))?
+            .collect::<rusqlite::Result<SessionPeople>>()?;
+        Ok(rows)
+    })
+}
+
+pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
+    if args.session.is_some() && args.collected.is_none() && !args.fingerprints {
+        return Err(trailprint::Error::InvalidRequest(
+            "--session goes with --collected or --fingerprints".into(),
+        ));
+    }
+    if args.fingerprints || args.radio_map {
+        return scans(args, db);
+    }
     if args.collected.is_none() && is_file_spec(&args.name) {
         let mut text = load_building(&args.name, db)?.to_file().to_json();
         text.push('\n');
@@ -53,4 +105,82 @@ pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
         }
     };
     write_output(&args.output, &text)
+}
+
+/// `--fingerprints` and `--radio-map`: the building's scans, from a file (its pilot data)
+/// or from the database (pilot data and every session).
+fn scans(args: &Args, db: Option<&Path>) -> Result<()> {
+    let (building, collected, people): (Building, _, _) = if is_file_spec(&args.name) {
+        (load_building(&args.name, db)?, Vec::new(), SessionPeople::new())
+    } else {
+        let store = open_store(db)?;
+        let bref = building_ref(&store, &args.name)?;
+        let id = match bref {
+            BuildingRef::Id(id) => id,
+            BuildingRef::Name(n) => store.building_info(n)?.id,
+        };
+        let b = store.get_building(bref)?;
+        let list = store.list_collected(bref, args.session)?;
+        (b, list, people(&store, id)?)
+    };
+    let mut rows = scan_rows(&building, &collected, &people);
+    if args.session.is_some() {
+        rows.retain(|r| r.source == "session");
+    }
+    if args.fingerprints {
+        return match args.format {
+            ScanFormat::Jsonl => write_output(&args.output, &jsonl(&rows)),
+            ScanFormat::Uji => {
+                let (csv, waps) = uji_csv(&rows);
+                write_output(&args.output, &csv)?;
+                if args.output == Path::new("-") {
+                    eprint!("{waps}");
+                } else {
+                    let table = waps_path(&args.output);
+                    write_output(&table, &waps)?;
+                    eprintln!(
+                        "wrote {} scans to {} and the access point names to {}",
+                        rows.len(),
+                        args.output.display(),
+                        table.display()
+                    );
+                }
+                Ok(())
+            }
+        };
+    }
+    let (kernel, _) = args.kernel.resolve(&building)?;
+    let grid = walkable_grid(&building, args.grid)?;
+    let map = radio_map(&rows, &kernel, grid)?;
+    let geojson = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("geojson") || e.eq_ignore_ascii_case("json"));
+    let text = if geojson {
+        radio_map_geojson(&map, building.geo, &building.name)? + "\n"
+    } else {
+        radio_map_csv(&map, building.geo)
+    };
+    write_output(&args.output, &text)?;
+    if args.output != Path::new("-") {
+        eprintln!(
+            "wrote the radio map of {} access points on {} grid points (kernel sf2 {}, ell {}, sn2 {}) to {}",
+            map.aps.len(),
+            map.points.len(),
+            kernel.sf2,
+            kernel.ell,
+            kernel.sn2,
+            args.output.display()
+        );
+    }
+    Ok(())
+}
+
+/// `scans.csv` -> `scans.waps.csv`.
+fn waps_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "fingerprints".into());
+    out.with_file_name(format!("{stem}.waps.csv"))
 }

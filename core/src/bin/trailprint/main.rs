@@ -21,6 +21,8 @@ mod cmd_export;
 mod cmd_fit;
 mod cmd_generate;
 mod cmd_import;
+mod cmd_import_floorplan;
+mod cmd_pilot;
 mod cmd_plan;
 mod cmd_render;
 mod cmd_simulate;
@@ -64,6 +66,10 @@ enum Command {
     Render(cmd_render::Args),
     /// Import a survey-building/1 file into the database.
     Import(cmd_import::Args),
+    /// Import an indoor map (OpenStreetMap indoor GeoJSON or IMDF) as a building.
+    ImportFloorplan(cmd_import_floorplan::Args),
+    /// Pilot data: `pilot add NAME FILE.json` adds pilot fingerprints to a building.
+    Pilot(cmd_pilot::Args),
     /// List the buildings in the database.
     Buildings(cmd_buildings::Args),
     /// Export a building (or its collected fingerprints) to a file.
@@ -111,6 +117,8 @@ fn main() -> ExitCode {
         Command::Experiment(a) => cmd_experiment::run(a, db),
         Command::Render(a) => cmd_render::run(a, db),
         Command::Import(a) => cmd_import::run(&a, db),
+        Command::ImportFloorplan(a) => cmd_import_floorplan::run(&a, db),
+        Command::Pilot(a) => cmd_pilot::run(a, db),
         Command::Buildings(a) => cmd_buildings::run(&a, db),
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),

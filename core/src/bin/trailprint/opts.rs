@@ -57,6 +57,17 @@ impl KernelOpts {
         if let Some(k) = b.kernel {
             return Ok((k, "file"));
         }
+        if b.pilot.len() < 3 {
+            // A building made from a floor plan has no pilot data: say what would do.
+            return Err(Error::Fit(format!(
+                "building {:?} has {} pilot fingerprint(s) and no kernel; give one with \
+                 --kernel SF2,ELL,SN2 (for example --kernel 40,6,9), or add pilot data (at \
+                 least 3 locations) with `trailprint pilot add {:?} PILOT.json`",
+                b.name,
+                b.pilot.len(),
+                b.name
+            )));
+        }
         Ok((fit_kernel(&b.pilot)?.kernel, "fit"))
     }
 }

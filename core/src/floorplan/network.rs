@@ -1,0 +1,888 @@
+//! The walkable network of a [`Plan`]: what a surveyor can walk, as a building graph.
+//!
+//! Per floor:
+//! 1. every walkable space gets a grid ([`geom::grid_points`]: rows and columns along its
+//!    walls, about `spacing` apart, at least [`CLEARANCE_M`] from the walls), joined to its
+//!    four neighbours where the segment stays inside; places the grid missed (a narrow arm
+//!    off the grid's rows) are filled with the point of most clearance, and parts of one
+//!    space that the grid left apart are bridged by their closest pair in sight. Shafts
+//!    (elevators, stairs) and spaces too small for a grid point get one vertex inside.
+//! 2. every door gets a vertex on the boundary, joined to the nearest vertices in sight of
+//!    each space it touches (within [`DOOR_SNAP_M`]);
+//! 3. a room, shaft or stairwell without a tagged door is joined to each corridor or open
+//!    area it borders through a vertex in the middle of the longest boundary they share;
+//!    corridors and areas that border each other are joined along their shared boundary
+//!    (its middle, and every two spacings along a long one).
+//!
+//! No edge leaves its space (checked every 5 cm, [`JOIN_TOL_M`] of slack at doors and
+//! shared boundaries) or crosses a wall line except within [`JOIN_TOL_M`] of a door or
+//! joint. Floors are joined at stairs (consecutive levels, [`super::STAIRS_M_PER_LEVEL`]
+//! per level) and elevators (every pair of levels served, [`super::ELEVATOR_BASE_M`] plus
+//! [`super::ELEVATOR_M_PER_LEVEL`] per level). Last, the largest connected part is kept
+//! and every other part is described in [`DroppedPart`]s.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+
+use geo::{Area, BooleanOps, BoundingRect, Contains, Coord, InteriorPoint, Point, Polygon, Rect};
+
+use super::geom::{
+    self, boundary_distance, covers, dist, nearest_boundary_point, segment_within, shared_runs,
+};
+use super::{
+    ConnectorKind, DroppedPart, ELEVATOR_BASE_M, ELEVATOR_M_PER_LEVEL, FloorplanImport, Format,
+    ImportStats, Plan, STAIRS_M_PER_LEVEL, SpaceKind,
+};
+use crate::building::{
+    Building, BuildingFile, EdgeSpec, FORMAT, FloorSpec, Outline, OutlineKind, VertexSpec,
+};
+use crate::{Error, Result};
+
+/// Grid points keep at least this distance from walls, metres.
+pub const CLEARANCE_M: f64 = 0.3;
+/// A door joins the spaces whose outline passes within this distance, metres.
+pub const DOOR_SNAP_M: f64 = 0.5;
+/// Slack of an edge at a door or a shared boundary, and of a wall crossing at a door, metres.
+pub const JOIN_TOL_M: f64 = 0.1;
+/// Two outlines closer than this share a boundary, metres.
+pub const SHARED_TOL_M: f64 = 0.15;
+/// A stair or elevator stop outside walkable space is moved onto the nearest space within
+/// this distance, metres.
+const STOP_SNAP_M: f64 = 3.0;
+/// Storey height assumed for a long flight of steps, metres.
+const STOREY_M: f64 = 3.0;
+
+#[derive(Debug, Clone)]
+struct NetVertex {
+    id: String,
+    floor: i64,
+    pos: Coord<f64>,
+    label: Option<String>,
+    /// What it belongs to, for the report of dropped parts.
+    what: String,
+}
+
+#[derive(Default)]
+struct Net {
+    verts: Vec<NetVertex>,
+    at: HashMap<(i64, i64, i64), usize>,
+    edges: Vec<(usize, usize, Option<f64>)>,
+    pairs: HashSet<(usize, usize)>,
+    /// Vertices of each space (by space index).
+    space_verts: HashMap<usize, Vec<usize>>,
+    /// Door and joint positions per floor: where edges may cross walls.
+    portals: HashMap<i64, Vec<Coord<f64>>>,
+}
+
+fn floor_tag(f: i64) -> String {
+    if f < 0 {
+        format!("fm{}", -f)
+    } else {
+        format!("f{f}")
+    }
+}
+
+/// Rounds to the millimetre, the precision of the written file.
+fn mm(c: Coord<f64>) -> Coord<f64> {
+    Coord {
+        x: (c.x * 1000.0).round() / 1000.0,
+        y: (c.y * 1000.0).round() / 1000.0,
+    }
+}
+
+impl Net {
+    /// Adds a vertex, or returns the one already at this millimetre of this floor.
+    fn vertex(
+        &mut self,
+        floor: i64,
+        pos: Coord<f64>,
+        id: String,
+        label: Option<String>,
+        what: String,
+    ) -> usize {
+        let pos = mm(pos);
+        let key = (
+            floor,
+            (pos.x * 1000.0).round() as i64,
+            (pos.y * 1000.0).round() as i64,
+        );
+        if let Some(&v) = self.at.get(&key) {
+            return v;
+        }
+        let v = self.verts.len();
+        self.verts.push(NetVertex {
+            id,
+            floor,
+            pos,
+            label,
+            what,
+        });
+        self.at.insert(key, v);
+        v
+    }
+
+    fn edge(&mut self, a: usize, b: usize, length: Option<f64>) -> bool {
+        if a == b || !self.pairs.insert((a.min(b), a.max(b))) {
+            return false;
+        }
+        self.edges.push((a, b, length));
+        true
+    }
+
+    fn has_edge(&self, a: usize, b: usize) -> bool {
+        self.pairs.contains(&(a.min(b), a.max(b)))
+    }
+}
+
+/// Everything the checks of one floor need.
+struct FloorCtx<'a> {
+    floor: i64,
+    walls: Vec<&'a geo::LineString<f64>>,
+}
+
+impl FloorCtx<'_> {
+    /// Whether the segment crosses no wall except within [`JOIN_TOL_M`] of a portal.
+    fn walls_ok(&self, net: &Net, a: Coord<f64>, b: Coord<f64>) -> bool {
+        if self.walls.is_empty() {
+            return true;
+        }
+        let portals = net.portals.get(&self.floor);
+        geom::wall_crossings(a, b, &self.walls).into_iter().all(|c| {
+            portals.is_some_and(|ps| ps.iter().any(|p| dist(*p, c) <= JOIN_TOL_M))
+        })
+    }
+}
+
+/// Joins vertex `v` (on the boundary of or inside `space`) to up to `k` of the space's
+/// nearest vertices in sight. Returns how many it joined.
+fn connect_into(
+    net: &mut Net,
+    ctx: &FloorCtx<'_>,
+    poly: &Polygon<f64>,
+    space: usize,
+    v: usize,
+    k: usize,
+) -> usize {
+    let pv = net.verts[v].pos;
+    let mut cands: Vec<(f64, usize)> = net
+        .space_verts
+        .get(&space)
+        .map(|list| {
+            list.iter()
+                .filter(|&&w| w != v)
+                .map(|&w| (dist(pv, net.verts[w].pos), w))
+                .collect()
+        })
+        .unwrap_or_default();
+    cands.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut joined = 0;
+    for (_, w) in cands {
+        if joined >= k {
+            break;
+        }
+        let pw = net.verts[w].pos;
+        if net.has_edge(v, w) {
+            joined += 1;
+            continue;
+        }
+        if segment_within(poly, pv, pw, JOIN_TOL_M) && ctx.walls_ok(net, pv, pw) {
+            net.edge(v, w, None);
+            joined += 1;
+        }
+    }
+    joined
+}
+
+fn rect_gap(a: &Rect<f64>, b: &Rect<f64>) -> f64 {
+    let dx = (a.min().x - b.max().x).max(b.min().x - a.max().x).max(0.0);
+    let dy = (a.min().y - b.max().y).max(b.min().y - a.max().y).max(0.0);
+    dx.hypot(dy)
+}
+
+/// Lays the network of `plan` and writes the building.
+pub(crate) fn build(
+    plan: Plan,
+    format: Format,
+    spacing: f64,
+    name: String,
+    origin: &str,
+) -> Result<FloorplanImport> {
+    let Plan {
+        name: _,
+        geo,
+        floors,
+        spaces,
+        doors,
+        walls,
+        connectors,
+        outlines: building_outlines,
+        mut warnings,
+    } = plan;
+    if spaces.is_empty() {
+        return Err(Error::invalid(
+            origin,
+            "$",
+            match format {
+                Format::OsmIndoor => {
+                    "nothing walkable: no polygon tagged indoor=room, indoor=corridor or \
+                     indoor=area (Simple Indoor Tagging) with a readable outline"
+                }
+                Format::Imdf => "nothing walkable: no unit with a walkable category and a readable outline",
+            },
+        ));
+    }
+    let rank: BTreeMap<i64, usize> = floors.iter().enumerate().map(|(i, f)| (f.id, i)).collect();
+    let mut net = Net::default();
+    let mut spaces_with_vertices = BTreeSet::new();
+    let mut doors_used = 0usize;
+    let mut door_touched = vec![false; doors.len()];
+    let bboxes: Vec<Option<Rect<f64>>> = spaces.iter().map(|s| s.polygon.bounding_rect()).collect();
+
+    for floor in &floors {
+        let f = floor.id;
+        let ft = floor_tag(f);
+        let ctx = FloorCtx {
+            floor: f,
+            walls: walls
+                .iter()
+                .filter(|w| w.floor == f)
+                .map(|w| &w.line)
+                .collect(),
+        };
+        // Doors given for this floor count as portals from the start (grid edges may pass
+        // a wall there).
+        for d in &doors {
+            if d.floors.as_ref().is_none_or(|fl| fl.contains(&f)) {
+                net.portals.entry(f).or_default().push(d.pos);
+            }
+        }
+        let on_floor: Vec<usize> = (0..spaces.len()).filter(|&i| spaces[i].floor == f).collect();
+
+        // 1. The grid of each space.
+        for &si in &on_floor {
+            let sp = &spaces[si];
+            let poly = &sp.polygon;
+            let what = sp.describe();
+            let mut k = 0usize;
+            let new_id = |k: &mut usize| {
+                *k += 1;
+                format!("{ft}-s{si}-{k}")
+            };
+            let mut mine: Vec<usize> = Vec::new();
+            let grid = if matches!(sp.kind, SpaceKind::Elevator | SpaceKind::Stairs) {
+                Vec::new()
+            } else {
+                geom::grid_points(poly, spacing, CLEARANCE_M)
+            };
+            let mut cell: HashMap<(usize, usize), usize> = HashMap::new();
+            for g in &grid {
+                let v = net.vertex(f, g.pos, new_id(&mut k), sp.name.clone(), what.clone());
+                cell.insert((g.row, g.col), v);
+                mine.push(v);
+            }
+            for g in &grid {
+                let v = cell[&(g.row, g.col)];
+                for (dr, dc) in [(0, 1), (1, 0)] {
+                    if let Some(&w) = cell.get(&(g.row + dr, g.col + dc)) {
+                        let (a, b) = (net.verts[v].pos, net.verts[w].pos);
+                        if segment_within(poly, a, b, 0.0) && ctx.walls_ok(&net, a, b) {
+                            net.edge(v, w, None);
+                        }
+                    }
+                }
+            }
+            if mine.is_empty() {
+                let p = poly
+                    .interior_point()
+                    .map(|p| p.0)
+                    .unwrap_or_else(|| poly.exterior().0[0]);
+                // A shaft's vertex says what it is (its name stays on the outline).
+                let label = match sp.kind {
+                    SpaceKind::Elevator | SpaceKind::Stairs => Some(sp.kind.as_str().to_string()),
+                    _ => sp.name.clone(),
+                };
+                mine.push(net.vertex(f, p, new_id(&mut k), label, what.clone()));
+            } else {
+                fill_gaps(
+                    &mut net,
+                    &ctx,
+                    poly,
+                    spacing,
+                    &mut mine,
+                    &mut || new_id(&mut k),
+                    sp.name.clone(),
+                    &what,
+                );
+            }
+            net.space_verts.insert(si, mine.clone());
+            bridge(&mut net, &ctx, poly, &mine);
+            spaces_with_vertices.insert(si);
+        }
+
+        // 2. Doors.
+        let mut door_pairs: HashSet<(usize, usize)> = HashSet::new();
+        let mut has_door: HashSet<usize> = HashSet::new();
+        for (di, d) in doors.iter().enumerate() {
+            if d.floors.as_ref().is_some_and(|fl| !fl.contains(&f)) {
+                continue;
+            }
+            let mut touching: Vec<(f64, usize)> = on_floor
+                .iter()
+                .map(|&si| (boundary_distance(&spaces[si].polygon, d.pos), si))
+                .filter(|&(dd, si)| dd <= DOOR_SNAP_M || spaces[si].polygon.contains(&Point(d.pos)))
+                .collect();
+            if touching.is_empty() {
+                continue;
+            }
+            door_touched[di] = true;
+            touching.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let nearest = touching[0].1;
+            let pos = if spaces[nearest].polygon.contains(&Point(d.pos)) && touching.len() == 1 {
+                d.pos
+            } else {
+                nearest_boundary_point(&spaces[nearest].polygon, d.pos)
+            };
+            net.portals.entry(f).or_default().push(mm(pos));
+            let v = net.vertex(
+                f,
+                pos,
+                format!("{ft}-d{di}"),
+                Some("door".into()),
+                format!("door {}", d.source),
+            );
+            let mut joined_any = false;
+            for &(_, si) in &touching {
+                if connect_into(&mut net, &ctx, &spaces[si].polygon, si, v, 2) > 0 {
+                    joined_any = true;
+                    has_door.insert(si);
+                } else {
+                    warnings.add(
+                        "doors with no vertex of a space they touch in sight",
+                        format!("{} / {}", d.source, spaces[si].describe()),
+                    );
+                }
+            }
+            for (i, &(_, a)) in touching.iter().enumerate() {
+                for &(_, b) in &touching[i + 1..] {
+                    door_pairs.insert((a.min(b), a.max(b)));
+                }
+            }
+            if joined_any {
+                doors_used += 1;
+            }
+        }
+
+        // 3. Shared boundaries.
+        for (i, &a) in on_floor.iter().enumerate() {
+            for &b in &on_floor[i + 1..] {
+                let (sa, sb) = (&spaces[a], &spaces[b]);
+                let (Some(ra), Some(rb)) = (bboxes[a], bboxes[b]) else {
+                    continue;
+                };
+                if rect_gap(&ra, &rb) > SHARED_TOL_M {
+                    continue;
+                }
+                if sa.kind.is_open() || sb.kind.is_open() {
+                    let overlap = sa.polygon.intersection(&sb.polygon).unsigned_area();
+                    if overlap > 0.5 {
+                        warnings.add(
+                            "overlapping walkable polygons (joined where they overlap)",
+                            format!("{} / {}", sa.source, sb.source),
+                        );
+                    }
+                } else {
+                    continue; // two rooms: only a door joins them
+                }
+                if door_pairs.contains(&(a.min(b), a.max(b))) {
+                    continue;
+                }
+                // Sample along the room's (or the smaller space's) outline.
+                let (room, other) = match (sa.kind.is_open(), sb.kind.is_open()) {
+                    (false, true) => (a, b),
+                    (true, false) => (b, a),
+                    _ => {
+                        if sa.polygon.unsigned_area() <= sb.polygon.unsigned_area() {
+                            (a, b)
+                        } else {
+                            (b, a)
+                        }
+                    }
+                };
+                let open_pair = spaces[room].kind.is_open();
+                if !open_pair && has_door.contains(&room) {
+                    continue; // the room's own door is its way in
+                }
+                let runs = shared_runs(&spaces[room].polygon, &spaces[other].polygon, SHARED_TOL_M);
+                let mut points: Vec<Coord<f64>> = Vec::new();
+                if open_pair {
+                    for run in runs.iter().filter(|r| r.length >= 0.5) {
+                        let step = 2.0 * spacing;
+                        let n = (run.length / step).floor().max(0.0) as usize + 1;
+                        let first = (run.length - (n - 1) as f64 * step) / 2.0;
+                        points.extend((0..n).map(|j| run.at(first + j as f64 * step)));
+                    }
+                } else if let Some(run) = runs.first().filter(|r| r.length >= 0.3) {
+                    points.push(run.middle());
+                }
+                for (j, p) in points.into_iter().enumerate() {
+                    net.portals.entry(f).or_default().push(mm(p));
+                    let v = net.vertex(
+                        f,
+                        p,
+                        format!("{ft}-j{room}-{other}-{j}"),
+                        Some("opening".into()),
+                        format!("opening {} / {}", spaces[room].source, spaces[other].source),
+                    );
+                    let n1 = connect_into(&mut net, &ctx, &spaces[room].polygon, room, v, 2);
+                    let n2 = connect_into(&mut net, &ctx, &spaces[other].polygon, other, v, 2);
+                    if n1 == 0 || n2 == 0 {
+                        warnings.add(
+                            "shared boundaries with no vertex in sight on one side",
+                            format!("{} / {}", spaces[room].source, spaces[other].source),
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    for (d, touched) in doors.iter().zip(&door_touched) {
+        if !touched {
+            warnings.add(
+                "doors on the outline of no walkable space (ignored)",
+                d.source.clone(),
+            );
+        }
+    }
+
+    // 4. Vertical connections.
+    let mut connectors_used = 0usize;
+    for (ci, c) in connectors.iter().enumerate() {
+        let mut stops: Vec<(usize, i64, usize)> = Vec::new(); // (rank, floor, vertex)
+        for &(f, p) in &c.stops {
+            let Some(&r) = rank.get(&f) else { continue };
+            let ctx = FloorCtx {
+                floor: f,
+                walls: walls
+                    .iter()
+                    .filter(|w| w.floor == f)
+                    .map(|w| &w.line)
+                    .collect(),
+            };
+            // The smallest space on that floor that holds the stop (the shaft itself).
+            let holding = (0..spaces.len())
+                .filter(|&si| spaces[si].floor == f && covers(&spaces[si].polygon, p, JOIN_TOL_M))
+                .min_by(|&x, &y| {
+                    spaces[x]
+                        .polygon
+                        .unsigned_area()
+                        .total_cmp(&spaces[y].polygon.unsigned_area())
+                });
+            let (si, pos) = match holding {
+                Some(si) => (si, p),
+                None => {
+                    let near = (0..spaces.len())
+                        .filter(|&si| spaces[si].floor == f)
+                        .map(|si| (boundary_distance(&spaces[si].polygon, p), si))
+                        .filter(|&(d, _)| d <= STOP_SNAP_M)
+                        .min_by(|x, y| x.0.total_cmp(&y.0));
+                    match near {
+                        Some((_, si)) => {
+                            warnings.add(
+                                "stair and elevator stops outside walkable space (moved onto the nearest space within 3 m)",
+                                format!("{} level {f}", c.source),
+                            );
+                            let q = nearest_boundary_point(&spaces[si].polygon, p);
+                            // Step 0.2 m inside, towards the space's inner point.
+                            let inner = spaces[si].polygon.interior_point().map_or(q, |ip| ip.0);
+                            let d = dist(q, inner);
+                            let pos = if d > 0.2 { q + (inner - q) * (0.2 / d) } else { q };
+                            (si, pos)
+                        }
+                        None => {
+                            warnings.add(
+                                "stair and elevator stops with no walkable space on their level (left out)",
+                                format!("{} level {f}", c.source),
+                            );
+                            continue;
+                        }
+                    }
+                }
+            };
+            let (tag, label) = match c.kind {
+                ConnectorKind::Elevator => ("e", "elevator"),
+                ConnectorKind::Stairs => ("t", "stairs"),
+            };
+            let v = net.vertex(
+                f,
+                pos,
+                format!("{}-{tag}{ci}", floor_tag(f)),
+                Some(label.into()),
+                format!("{label} {}", c.source),
+            );
+            if connect_into(&mut net, &ctx, &spaces[si].polygon, si, v, 2) == 0
+                && net.space_verts.get(&si).is_none_or(|l| !l.contains(&v))
+            {
+                warnings.add(
+                    "stair and elevator stops with no vertex in sight",
+                    format!("{} level {f}", c.source),
+                );
+            }
+            if !stops.iter().any(|s| s.1 == f) {
+                stops.push((r, f, v));
+            }
+        }
+        stops.sort_unstable();
+        if stops.len() < 2 {
+            warnings.add(
+                "stairs and elevators reaching fewer than two levels (not joined)",
+                c.source.clone(),
+            );
+            continue;
+        }
+        match c.kind {
+            ConnectorKind::Elevator => {
+                for (i, a) in stops.iter().enumerate() {
+                    for b in &stops[i + 1..] {
+                        let levels = (b.0 - a.0) as f64;
+                        net.edge(a.2, b.2, Some(ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL * levels));
+                    }
+                }
+            }
+            ConnectorKind::Stairs => {
+                for w in stops.windows(2) {
+                    let levels = (w[1].0 - w[0].0) as f64;
+                    let run = dist(net.verts[w[0].2].pos, net.verts[w[1].2].pos);
+                    let len = (STAIRS_M_PER_LEVEL * levels).max(run.hypot(STOREY_M * levels));
+                    net.edge(w[0].2, w[1].2, Some(len));
+                }
+            }
+        }
+        connectors_used += 1;
+    }
+
+    // 5. Keep the largest connected part.
+    let n = net.verts.len();
+    let mut adj = vec![Vec::new(); n];
+    for &(a, b, _) in &net.edges {
+        adj[a].push(b);
+        adj[b].push(a);
+    }
+    let mut comp = vec![usize::MAX; n];
+    let mut comps: Vec<Vec<usize>> = Vec::new();
+    for s in 0..n {
+        if comp[s] != usize::MAX {
+            continue;
+        }
+        let c = comps.len();
+        comp[s] = c;
+        let mut stack = vec![s];
+        let mut members = Vec::new();
+        while let Some(v) = stack.pop() {
+            members.push(v);
+            for &w in &adj[v] {
+                if comp[w] == usize::MAX {
+                    comp[w] = c;
+                    stack.push(w);
+                }
+            }
+        }
+        members.sort_unstable();
+        comps.push(members);
+    }
+    let keep = (0..comps.len())
+        .max_by(|&a, &b| comps[a].len().cmp(&comps[b].len()).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let mut dropped = Vec::new();
+    for (ci, members) in comps.iter().enumerate() {
+        if ci == keep {
+            continue;
+        }
+        let floors: BTreeSet<i64> = members.iter().map(|&v| net.verts[v].floor).collect();
+        let mut what: Vec<String> = Vec::new();
+        for &v in members {
+            let w = &net.verts[v].what;
+            if !what.contains(w) {
+                what.push(w.clone());
+            }
+        }
+        if what.len() > 8 {
+            let more = what.len() - 8;
+            what.truncate(8);
+            what.push(format!("and {more} more"));
+        }
+        dropped.push(DroppedPart {
+            vertices: members.len(),
+            floors: floors.into_iter().collect(),
+            spaces: what,
+        });
+    }
+    dropped.sort_by_key(|d| std::cmp::Reverse(d.vertices));
+    let kept: HashSet<usize> = comps.get(keep).map(|m| m.iter().copied().collect()).unwrap_or_default();
+
+    // 6. The building file.
+    let kept_floors: BTreeSet<i64> = kept.iter().map(|&v| net.verts[v].floor).collect();
+    let floor_specs: Vec<FloorSpec> = floors
+        .iter()
+        .filter(|f| kept_floors.contains(&f.id))
+        .cloned()
+        .collect();
+    let vertices: Vec<VertexSpec> = (0..n)
+        .filter(|v| kept.contains(v))
+        .map(|v| {
+            let nv = &net.verts[v];
+            VertexSpec {
+                id: nv.id.clone(),
+                x: nv.pos.x,
+                y: nv.pos.y,
+                floor: nv.floor,
+                label: nv.label.clone(),
+            }
+        })
+        .collect();
+    let edges: Vec<EdgeSpec> = net
+        .edges
+        .iter()
+        .filter(|(a, _, _)| kept.contains(a))
+        .map(|&(a, b, length)| EdgeSpec {
+            a: net.verts[a].id.clone(),
+            b: net.verts[b].id.clone(),
+            length,
+        })
+        .collect();
+    let mut outlines = Vec::new();
+    let ring = |ls: &geo::LineString<f64>| -> Vec<[f64; 2]> {
+        let mut pts: Vec<[f64; 2]> = Vec::new();
+        for c in ls.coords() {
+            let c = mm(*c);
+            if pts.last() != Some(&[c.x, c.y]) {
+                pts.push([c.x, c.y]);
+            }
+        }
+        pts
+    };
+    let closed_ring = |ls: &geo::LineString<f64>| -> Option<Vec<[f64; 2]>> {
+        let mut pts = ring(ls);
+        if pts.len() > 1 && pts.first() == pts.last() {
+            pts.pop();
+        }
+        let distinct: BTreeSet<(u64, u64)> =
+            pts.iter().map(|p| (p[0].to_bits(), p[1].to_bits())).collect();
+        (distinct.len() >= 3).then_some(pts)
+    };
+    for (f, poly) in &building_outlines {
+        if !kept_floors.contains(f) {
+            continue;
+        }
+        if let Some(points) = closed_ring(poly.exterior()) {
+            outlines.push(Outline {
+                floor: *f,
+                kind: OutlineKind::Building,
+                name: None,
+                points,
+            });
+        }
+    }
+    for sp in &spaces {
+        if !kept_floors.contains(&sp.floor) {
+            continue;
+        }
+        let kind = match sp.kind {
+            SpaceKind::Corridor => OutlineKind::Corridor,
+            SpaceKind::Area => OutlineKind::Area,
+            SpaceKind::Room | SpaceKind::Elevator | SpaceKind::Stairs => OutlineKind::Room,
+        };
+        if let Some(points) = closed_ring(sp.polygon.exterior()) {
+            outlines.push(Outline {
+                floor: sp.floor,
+                kind,
+                name: sp.name.clone(),
+                points,
+            });
+        }
+        for hole in sp.polygon.interiors() {
+            let points = ring(hole);
+            if points.len() >= 2 {
+                outlines.push(Outline {
+                    floor: sp.floor,
+                    kind: OutlineKind::Wall,
+                    name: None,
+                    points,
+                });
+            }
+        }
+    }
+    for w in &walls {
+        if !kept_floors.contains(&w.floor) {
+            continue;
+        }
+        let points = ring(&w.line);
+        if points.len() >= 2 {
+            outlines.push(Outline {
+                floor: w.floor,
+                kind: OutlineKind::Wall,
+                name: None,
+                points,
+            });
+        }
+    }
+
+    let file = BuildingFile {
+        format: FORMAT.into(),
+        name,
+        floors: Some(floor_specs),
+        vertices,
+        edges,
+        pilot: Vec::new(),
+        test_points: Vec::new(),
+        dense_survey: Vec::new(),
+        kernel: None,
+        geo: Some(geo),
+        outlines,
+    };
+    // The network is built to pass; this is the importer checking itself.
+    let b = Building::from_file(file.clone(), origin)?;
+    let stats = ImportStats {
+        floors: b.floors.len(),
+        spaces: spaces_with_vertices
+            .iter()
+            .filter(|si| {
+                net.space_verts
+                    .get(si)
+                    .is_some_and(|l| l.iter().any(|v| kept.contains(v)))
+            })
+            .count(),
+        doors: doors_used,
+        connectors: connectors_used,
+        vertices: b.vertices.len(),
+        edges: b.edges.len(),
+    };
+    Ok(FloorplanImport {
+        file,
+        format,
+        warnings: warnings.into_list(),
+        dropped,
+        stats,
+    })
+}
+
+/// Adds a vertex wherever a point of the space with room to stand is farther than
+/// `spacing` from every vertex of the space (the grid's rows missed it), the point of most
+/// clearance first, and joins it to the space's vertices within 1.5 spacings in sight.
+#[allow(clippy::too_many_arguments)]
+fn fill_gaps(
+    net: &mut Net,
+    ctx: &FloorCtx<'_>,
+    poly: &Polygon<f64>,
+    spacing: f64,
+    mine: &mut Vec<usize>,
+    new_id: &mut dyn FnMut() -> String,
+    label: Option<String>,
+    what: &str,
+) {
+    let Some(bb) = poly.bounding_rect() else { return };
+    let step = spacing / 2.0;
+    let mut cands: Vec<(Coord<f64>, f64)> = Vec::new();
+    let nx = ((bb.width() / step).floor() as usize).min(4000);
+    let ny = ((bb.height() / step).floor() as usize).min(4000);
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let p = Coord {
+                x: bb.min().x + (i as f64 + 0.5) * step,
+                y: bb.min().y + (j as f64 + 0.5) * step,
+            };
+            if !poly.contains(&Point(p)) {
+                continue;
+            }
+            let clear = boundary_distance(poly, p);
+            if clear >= CLEARANCE_M {
+                cands.push((p, clear));
+            }
+        }
+    }
+    let mut covered: Vec<bool> = cands
+        .iter()
+        .map(|(p, _)| mine.iter().any(|&v| dist(*p, net.verts[v].pos) <= spacing))
+        .collect();
+    loop {
+        let best = (0..cands.len())
+            .filter(|&i| !covered[i])
+            .max_by(|&a, &b| cands[a].1.total_cmp(&cands[b].1).then(b.cmp(&a)));
+        let Some(i) = best else { break };
+        let p = cands[i].0;
+        let v = net.vertex(ctx.floor, p, new_id(), label.clone(), what.to_string());
+        for (j, c) in cands.iter().enumerate() {
+            if dist(c.0, p) <= spacing {
+                covered[j] = true;
+            }
+        }
+        let near: Vec<usize> = mine
+            .iter()
+            .copied()
+            .filter(|&w| w != v && dist(net.verts[w].pos, p) <= 1.5 * spacing)
+            .collect();
+        for w in near {
+            let pw = net.verts[w].pos;
+            if segment_within(poly, p, pw, 0.0) && ctx.walls_ok(net, p, pw) {
+                net.edge(v, w, None);
+            }
+        }
+        if !mine.contains(&v) {
+            mine.push(v);
+        }
+    }
+}
+
+/// Joins the parts of one space's network that the grid left apart, each time by the
+/// closest pair in sight (up to 400 pairs tried per join).
+fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]) {
+    if mine.len() < 2 {
+        return;
+    }
+    let local: HashMap<usize, usize> = mine.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    loop {
+        // Components of the space's vertices over the edges so far.
+        let mut parent: Vec<usize> = (0..mine.len()).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        for &(a, b, _) in &net.edges {
+            if let (Some(&ia), Some(&ib)) = (local.get(&a), local.get(&b)) {
+                let (ra, rb) = (find(&mut parent, ia), find(&mut parent, ib));
+                parent[ra] = rb;
+            }
+        }
+        let root0 = find(&mut parent, 0);
+        let mut cross: Vec<(f64, usize, usize)> = Vec::new();
+        for i in 0..mine.len() {
+            if find(&mut parent, i) != root0 {
+                continue;
+            }
+            for j in 0..mine.len() {
+                if find(&mut parent, j) == root0 {
+                    continue;
+                }
+                cross.push((dist(net.verts[mine[i]].pos, net.verts[mine[j]].pos), i, j));
+            }
+        }
+        if cross.is_empty() {
+            return;
+        }
+        cross.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut joined = false;
+        for &(_, i, j) in cross.iter().take(400) {
+            let (a, b) = (net.verts[mine[i]].pos, net.verts[mine[j]].pos);
+            if segment_within(poly, a, b, 0.0) && ctx.walls_ok(net, a, b) {
+                net.edge(mine[i], mine[j], None);
+                joined = true;
+                break;
+            }
+        }
+        if !joined {
+            return;
+        }
+    }
+}
