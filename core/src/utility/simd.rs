@@ -68,7 +68,10 @@ pub(crate) fn on_isa<T, R>(
         fn avx2<T, R>(f: impl FnOnce(T) -> R, arg: T) -> R {
             f(arg)
         }
-        assert!(Isa::supported().contains(&isa), "{isa:?} is not supported here");
+        assert!(
+            Isa::supported().contains(&isa),
+            "{isa:?} is not supported here"
+        );
         match isa {
             // SAFETY: checked above that the CPU supports `isa`.
             Isa::Avx512 => return unsafe { avx512(fused, arg) },
@@ -688,7 +691,10 @@ mod tests {
                     |y| axpy::<true>(2.0, &a, y),
                 );
                 for i in 0..n {
-                    assert!((y[i] - (b[i] + 2.0 * a[i])).abs() < 1e-15, "{isa:?} n={n} i={i}");
+                    assert!(
+                        (y[i] - (b[i] + 2.0 * a[i])).abs() < 1e-15,
+                        "{isa:?} n={n} i={i}"
+                    );
                 }
             }
         }
