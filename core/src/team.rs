@@ -278,15 +278,42 @@ mod tests {
             assert_eq!(p.walk.first(), Some(&t.start));
             assert_eq!(p.walk.last(), Some(&t.end));
         }
-        // The team's utility is at most the sum of the parts (submodularity) and at least
-        // the best single walk (monotonicity).
-        let sum: f64 = team.plans.iter().map(|p| p.utility_nats).sum();
-        let max = team
+        // What holds (f_D is monotone but not submodular, so no upper bound by the sum of
+        // the parts): the team is worth at least each member's walk alone, at least the
+        // best single walk an independent plan found, and exactly the joint utility of all
+        // its walks, as the reference evaluator computes it from the formula.
+        for p in &team.plans {
+            assert!(
+                team.team_utility_nats >= p.utility_nats - 1e-9,
+                "team {} below a member's {}",
+                team.team_utility_nats,
+                p.utility_nats
+            );
+        }
+        let best_single = alone
             .plans
             .iter()
             .map(|p| p.utility_nats)
             .fold(0.0, f64::max);
-        assert!(team.team_utility_nats <= sum + 1e-9 && team.team_utility_nats >= max - 1e-9);
+        assert!(
+            team.team_utility_nats >= best_single - 1e-9,
+            "team {} below the best single plan {best_single}",
+            team.team_utility_nats
+        );
+        let base = request(false).base;
+        let mut obs = crate::utility::reference::pilot_observations(&b.pilot_points());
+        for p in &team.plans {
+            let walk = b.resolve_walk(&p.walk).expect("walk");
+            obs.extend(observations(&b, &base, &walk).expect("samples"));
+        }
+        let joint =
+            crate::utility::reference::reference_utility(&base.kernel, &b.vertex_points(), &obs)
+                .expect("reference");
+        assert!(
+            (team.team_utility_nats - joint).abs() <= 1e-9 * joint.abs().max(1.0),
+            "team {} vs joint reference {joint}",
+            team.team_utility_nats
+        );
     }
 
     #[test]

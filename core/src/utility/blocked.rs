@@ -290,6 +290,7 @@ pub fn syrk_upper_sub<const FMA: bool>(s: &mut [f64], n: usize, r: &[f64], rows:
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::utility::simd::{Isa, on_isa};
 
     fn spd(n: usize) -> Vec<f64> {
         let mut a = vec![0.0; n * n];
@@ -304,29 +305,49 @@ mod tests {
 
     #[test]
     fn blocked_cholesky_matches_nalgebra_for_awkward_sizes() {
+        println!("blocked kernels tested on: {:?}", Isa::supported());
         for n in [1, 2, 7, 8, 9, 17, 40] {
             let a = spd(n);
             let m = nalgebra::DMatrix::from_row_slice(n, n, &a);
             let chol = m.clone().cholesky().expect("pd");
-            let mut u = a.clone();
-            let ld = cholesky_upper::<false>(&mut u, n).expect("pd");
-            assert!((ld - chol.ln_determinant()).abs() < 1e-10 * ld.abs().max(1.0));
             let l = chol.l();
-            for i in 0..n {
-                for j in i..n {
-                    assert!((u[i * n + j] - l[(j, i)]).abs() < 1e-12, "n={n} ({i},{j})");
+            for isa in Isa::supported() {
+                let mut u = a.clone();
+                let ld = on_isa(
+                    isa,
+                    &mut u,
+                    |u| cholesky_upper::<false>(u, n),
+                    |u| cholesky_upper::<true>(u, n),
+                )
+                .expect("pd");
+                assert!(
+                    (ld - chol.ln_determinant()).abs() < 1e-10 * ld.abs().max(1.0),
+                    "{isa:?} n={n}"
+                );
+                for i in 0..n {
+                    for j in i..n {
+                        assert!(
+                            (u[i * n + j] - l[(j, i)]).abs() < 1e-12,
+                            "{isa:?} n={n} ({i},{j})"
+                        );
+                    }
                 }
-            }
-            // Solve U^T X = B against nalgebra.
-            let w = 3;
-            let b: Vec<f64> = (0..n * w).map(|i| (i as f64 * 0.3).sin()).collect();
-            let mut x = b.clone();
-            solve_upper_transposed::<false>(&u, n, &mut x, w);
-            let bm = nalgebra::DMatrix::from_row_slice(n, w, &b);
-            let xm = l.solve_lower_triangular(&bm).expect("solve");
-            for i in 0..n {
-                for c in 0..w {
-                    assert!((x[i * w + c] - xm[(i, c)]).abs() < 1e-11);
+                // Solve U^T X = B against nalgebra.
+                let w = 3;
+                let b: Vec<f64> = (0..n * w).map(|i| (i as f64 * 0.3).sin()).collect();
+                let mut x = b.clone();
+                on_isa(
+                    isa,
+                    &mut x,
+                    |x| solve_upper_transposed::<false>(&u, n, x, w),
+                    |x| solve_upper_transposed::<true>(&u, n, x, w),
+                );
+                let bm = nalgebra::DMatrix::from_row_slice(n, w, &b);
+                let xm = l.solve_lower_triangular(&bm).expect("solve");
+                for i in 0..n {
+                    for c in 0..w {
+                        assert!((x[i * w + c] - xm[(i, c)]).abs() < 1e-11, "{isa:?} n={n}");
+                    }
                 }
             }
         }
@@ -337,19 +358,34 @@ mod tests {
         let n = 11;
         let rows = 13;
         let r: Vec<f64> = (0..rows * n).map(|i| (i as f64 * 0.7).cos()).collect();
-        let mut s = vec![0.0; n * n];
-        syrk_upper_sub::<false>(&mut s, n, &r, rows);
-        for a in 0..n {
-            for b in a..n {
-                let g: f64 = (0..rows).map(|i| r[i * n + a] * r[i * n + b]).sum();
-                assert!((s[a * n + b] + g).abs() < 1e-12);
+        for isa in Isa::supported() {
+            let mut s = vec![0.0; n * n];
+            on_isa(
+                isa,
+                &mut s,
+                |s| syrk_upper_sub::<false>(s, n, &r, rows),
+                |s| syrk_upper_sub::<true>(s, n, &r, rows),
+            );
+            for a in 0..n {
+                for b in a..n {
+                    let g: f64 = (0..rows).map(|i| r[i * n + a] * r[i * n + b]).sum();
+                    assert!((s[a * n + b] + g).abs() < 1e-12, "{isa:?} ({a},{b})");
+                }
             }
         }
     }
 
     #[test]
     fn not_positive_definite_is_reported() {
-        let mut a = vec![1.0, 2.0, 2.0, 1.0];
-        assert!(cholesky_upper::<false>(&mut a, 2).is_none());
+        for isa in Isa::supported() {
+            let mut a = vec![1.0, 2.0, 2.0, 1.0];
+            let r = on_isa(
+                isa,
+                &mut a,
+                |a| cholesky_upper::<false>(a, 2),
+                |a| cholesky_upper::<true>(a, 2),
+            );
+            assert!(r.is_none(), "{isa:?}");
+        }
     }
 }
