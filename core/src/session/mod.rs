@@ -359,7 +359,11 @@ impl Session {
                 ),
             });
         }
-        let replan_seq = self.finish_due_replan();
+        let mut replan_seq = self.finish_due_replan();
+        if replan_seq.is_none() && matches!(event, Event::CheckIn { .. }) && !applied.went_off_route
+        {
+            replan_seq = self.release_surplus_reserve();
+        }
         Ok(Ack {
             seq,
             status: self.tracker.status(),
@@ -396,27 +400,43 @@ impl Session {
         let to_end = replan::distances_from(&b, end);
         let home = to_end[origin];
         let over_budget = home > budget + replan::BUDGET_EPS;
-        let reserve = if over_budget || !self.tracker.options().deviation_reserve {
-            0.0
-        } else {
-            self.deviation_reserve(home).clamp(0.0, budget - home)
-        };
+        let keep = !over_budget && self.tracker.options().deviation_reserve;
         let left_for_plan = budget;
-        let budget = budget - reserve;
-        let walk = if over_budget || budget <= home + 1e-6 {
-            replan::shortest_path(&b, origin, end)?
-        } else {
-            self.replanner.replan(&ReplanRequest {
-                building: &b,
-                kernel: self.kernel,
-                model,
-                prior: &prior,
-                start: origin,
-                end,
-                budget_m: budget,
-                seed,
-            })?
+        let plan_within = |this: &Self, budget: f64| -> Result<Vec<usize>> {
+            if over_budget || budget <= home + 1e-6 {
+                replan::shortest_path(&b, origin, end)
+            } else {
+                this.replanner.replan(&ReplanRequest {
+                    building: &b,
+                    kernel: this.kernel,
+                    model,
+                    prior: &prior,
+                    start: origin,
+                    end,
+                    budget_m: budget,
+                    seed,
+                })
+            }
         };
+        // The reserve for the way home from here; if the walk then goes farther from the
+        // end than here, it has to come back from there: plan once more with the reserve
+        // for that way home.
+        let reserve_for = |this: &Self, h: f64| {
+            if keep {
+                this.deviation_reserve(h, &to_end).clamp(0.0, left_for_plan - home)
+            } else {
+                0.0
+            }
+        };
+        let mut reserve = reserve_for(self, home);
+        let mut walk = plan_within(self, budget - reserve)?;
+        let farthest = walk.iter().map(|&v| to_end[v]).fold(home, f64::max);
+        let wider = reserve_for(self, farthest);
+        if wider > reserve + 1e-6 {
+            reserve = wider;
+            walk = plan_within(self, budget - reserve)?;
+        }
+        let budget = budget - reserve;
         b.check_walk(&walk)?;
         let length = b.walk_length(&walk);
         if walk.first() != Some(&origin) || walk.last() != Some(&end) {
@@ -479,21 +499,27 @@ impl Session {
         })
     }
 
-    /// Metres to keep back, when replanning at `home` metres from the end, for the wrong
-    /// turns still to come.
+    /// Metres to keep back, when replanning at `home` metres from the end (`to_end`: every
+    /// vertex's distance to the end), for the wrong turns still to come.
     ///
-    /// The rate is the session's own: off-route events per metre walked (over at least ten
-    /// mean edge lengths, so that one early wrong turn does not read as a storm). A wrong
-    /// turn costs about two edges (out to the wrong vertex and back). Wrong turns in the
-    /// middle of the walk cost nothing against the budget, since the replan that follows
-    /// fits the budget left; what overruns it are the wrong turns on the way back to the
-    /// end, when the budget left is just the way back. The walk ahead has to cover at least
-    /// `home` metres, on which `rate * home` wrong turns are expected, plus the wrong turns
-    /// on their detours (a geometric series, `1 / (1 - rate * cost)`, capped at 4). The
-    /// reserve is that expectation plus one standard deviation of a Poisson count, times
-    /// the cost. With no wrong turn yet, it is zero: a surveyor (or a robot) that follows
-    /// the plan never gets a shorter one.
-    fn deviation_reserve(&self, home: f64) -> f64 {
+    /// Wrong turns in the middle of the walk cost nothing against the budget, since the
+    /// replan that follows fits the budget left; what overruns it are the wrong turns on
+    /// the way back to the end, when the budget left is just the way back. So:
+    /// * the rate is the session's own, off-route events per metre walked (over at least
+    ///   ten mean edge lengths, so that one early wrong turn does not read as a storm);
+    /// * a wrong turn from `u` onto the edge to `w` costs `len + to_end(w) - to_end(u)`
+    ///   against the way home (up to twice the edge); `cost` is its mean over the edges
+    ///   leaving junctions (vertices of degree 3 or more, where a wrong turn is possible)
+    ///   that do not lead home (those are the planned steps on the way home);
+    /// * on the `home` metres still to walk at least, `rate * home` wrong turns are
+    ///   expected, plus those on their own detours (a geometric series,
+    ///   `1 / (1 - rate * cost)`, capped at 4);
+    /// * the reserve is `cost` times that expectation plus one standard deviation of a
+    ///   Poisson count.
+    ///
+    /// With no wrong turn yet it is zero: a surveyor (or a robot) that follows the plan
+    /// never gets a shorter one.
+    fn deviation_reserve(&self, home: f64, to_end: &[f64]) -> f64 {
         let t = &self.tracker;
         let events = f64::from(t.off_route_events());
         let b = &self.building;
@@ -501,11 +527,72 @@ impl Session {
             return 0.0;
         }
         let edge = b.total_edge_length() / b.edges.len() as f64;
-        let cost = 2.0 * edge;
+        let (mut sum, mut n) = (0.0, 0usize);
+        for junctions_only in [true, false] {
+            for u in 0..b.len() {
+                let nb = b.neighbours(u);
+                if (junctions_only && nb.len() < 3) || !to_end[u].is_finite() {
+                    continue;
+                }
+                for &(w, e) in nb {
+                    // A step that leads home is the planned one, not a wrong turn.
+                    if to_end[w].is_finite() && to_end[w] >= to_end[u] {
+                        sum += b.edges[e].length + to_end[w] - to_end[u];
+                        n += 1;
+                    }
+                }
+            }
+            if n > 0 {
+                break;
+            }
+        }
+        let cost = if n > 0 { sum / n as f64 } else { 2.0 * edge };
         let rate = events / t.walked_m().max(10.0 * edge);
         let compound = 1.0 / (1.0 - (rate * cost).min(0.75));
         let expected = rate * home * compound;
         cost * (expected + expected.sqrt())
+    }
+
+    /// After an on-route check-in: when the walk ahead leaves clearly more in reserve
+    /// than the wrong turns still to come need (the way home got shorter and no wrong turn
+    /// used the reserve), replans so that the walk ahead uses the surplus. Only once a
+    /// replan has kept a reserve.
+    fn release_surplus_reserve(&mut self) -> Option<i64> {
+        let t = &self.tracker;
+        if self.reserve_m <= 0.0
+            || !t.options().auto_replan
+            || !t.options().deviation_reserve
+            || t.off_route()
+            || t.status() != SessionStatus::Active
+        {
+            return None;
+        }
+        let b = self.building.clone();
+        let (origin, _) = t.replan_origin(&b).ok()?;
+        let end = t.end();
+        if origin == end {
+            return None;
+        }
+        let to_end = replan::distances_from(&b, end);
+        let farthest = t
+            .route_ahead(&b)
+            .iter()
+            .filter_map(|w| b.vertex_index(&w.vertex))
+            .map(|v| to_end[v])
+            .fold(to_end[origin], f64::max);
+        let need = self.deviation_reserve(farthest, &to_end);
+        let edge = b.total_edge_length() / b.edges.len().max(1) as f64;
+        let surplus = self.slack_m() - need;
+        if surplus <= (4.0 * edge).max(0.03 * t.budget_m()) {
+            return None;
+        }
+        match self.replan() {
+            Ok(o) => Some(o.seq),
+            Err(e) => {
+                self.last_replan_error = Some(e.to_string());
+                None
+            }
+        }
     }
 
     /// Metres the last replan kept back for wrong turns (0 before any replan).
