@@ -32,11 +32,27 @@ fn last_json(text: &str) -> serde_json::Value {
 }
 
 /// `simulate --json` on a fixture with start = end.
-fn simulate(db: &Path, building: &str, start: &str, budget: &str, extra: &[&str]) -> serde_json::Value {
+fn simulate(
+    db: &Path,
+    building: &str,
+    start: &str,
+    budget: &str,
+    extra: &[&str],
+) -> serde_json::Value {
     let file = fixture(building);
     let mut args = vec![
-        "simulate", "--building", &file, "--start", start, "--end", start, "--budget", budget,
-        "--seed", "2", "--json",
+        "simulate",
+        "--building",
+        &file,
+        "--start",
+        start,
+        "--end",
+        start,
+        "--budget",
+        budget,
+        "--seed",
+        "2",
+        "--json",
     ];
     args.extend_from_slice(extra);
     last_json(&run(db, &args))
@@ -56,7 +72,14 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
         ("area-one.json", "r0c0", "45", "auto"),
         ("area-two.json", "b00", "140", "greedy"),
     ] {
-        let human = ["--surveyor", "human", "--deviate", "0.3", "--algorithm", algo];
+        let human = [
+            "--surveyor",
+            "human",
+            "--deviate",
+            "0.3",
+            "--algorithm",
+            algo,
+        ];
         let v = simulate(&db, building, start, budget, &human);
         let b: f64 = budget.parse().expect("budget");
         assert_eq!(v["status"], "finished", "{v}");
@@ -67,7 +90,10 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
         let mut no_reserve = human.to_vec();
         no_reserve.push("--no-reserve");
         let w = simulate(&db, building, start, budget, &no_reserve);
-        assert!(f(&w, "walked_m") > 1.1 * b, "{building} without reserve: {w}");
+        assert!(
+            f(&w, "walked_m") > 1.1 * b,
+            "{building} without reserve: {w}"
+        );
         assert_eq!(w["reserve_m"], 0.0);
     }
 }
@@ -80,13 +106,28 @@ fn a_robot_that_follows_the_plan_collects_exactly_the_planned_utility() {
         ("area-one.json", "r0c0", "45", "auto"),
         ("area-two.json", "b00", "140", "greedy"),
     ] {
-        let v = simulate(&db, building, start, budget, &["--surveyor", "robot", "--algorithm", algo]);
+        let v = simulate(
+            &db,
+            building,
+            start,
+            budget,
+            &["--surveyor", "robot", "--algorithm", algo],
+        );
         assert!(f(&v, "plan_length_m") > 0.5 * f(&v, "budget_m"), "{v}");
         assert_eq!(f(&v, "replans"), 0.0, "{v}");
         assert_eq!(f(&v, "reserve_m"), 0.0, "{v}");
-        let (p, c) = (f(&v, "planned_utility_nats"), f(&v, "collected_utility_nats"));
-        assert!((p - c).abs() <= 1e-9 * p, "{building}: planned {p}, collected {c}");
-        assert!((f(&v, "walked_m") - f(&v, "plan_length_m")).abs() < 1e-6, "{v}");
+        let (p, c) = (
+            f(&v, "planned_utility_nats"),
+            f(&v, "collected_utility_nats"),
+        );
+        assert!(
+            (p - c).abs() <= 1e-9 * p,
+            "{building}: planned {p}, collected {c}"
+        );
+        assert!(
+            (f(&v, "walked_m") - f(&v, "plan_length_m")).abs() < 1e-6,
+            "{v}"
+        );
     }
 }
 
@@ -124,12 +165,21 @@ fn sessions_lists_and_evaluate_judges_what_was_collected() {
         assert_eq!(row["samples"], v["samples"]);
         assert_eq!(row["events"], v["events"]);
         assert_eq!(row["replans"], v["replans"]);
-        assert!((f(row, "walked_m") - f(v, "walked_m")).abs() < 1e-9, "{row} vs {v}");
-        let (a, b) = (f(row, "collected_utility_nats"), f(v, "collected_utility_nats"));
+        assert!(
+            (f(row, "walked_m") - f(v, "walked_m")).abs() < 1e-9,
+            "{row} vs {v}"
+        );
+        let (a, b) = (
+            f(row, "collected_utility_nats"),
+            f(v, "collected_utility_nats"),
+        );
         assert!((a - b).abs() <= 1e-12 * b, "{row} vs {v}");
     }
     let table = run(&db, &["sessions"]);
-    assert!(table.contains("human") && table.contains("robot") && table.contains("finished"), "{table}");
+    assert!(
+        table.contains("human") && table.contains("robot") && table.contains("finished"),
+        "{table}"
+    );
 
     // evaluate --session: the session's own fingerprints, against the measured test points.
     let hid = human["session_id"].to_string();
@@ -147,12 +197,28 @@ fn sessions_lists_and_evaluate_judges_what_was_collected() {
     }
     // The robot scanned every 0.5 m: a denser map than the human's, less uncertain.
     assert!(f(&er, "collected") > f(&eh, "collected"));
-    assert!(f(&er, "std_mean_db") < f(&eh, "std_mean_db"), "{er} vs {eh}");
-    let k = last_json(&run(&db, &["evaluate", "--session", &rid, "--localizer", "knn", "--json"]));
+    assert!(
+        f(&er, "std_mean_db") < f(&eh, "std_mean_db"),
+        "{er} vs {eh}"
+    );
+    let k = last_json(&run(
+        &db,
+        &[
+            "evaluate",
+            "--session",
+            &rid,
+            "--localizer",
+            "knn",
+            "--json",
+        ],
+    ));
     assert_eq!(k["localizer"], "knn:3");
     assert!(f(&k, "mean_error_m").is_finite());
     let text = run(&db, &["evaluate", "--session", &hid]);
-    assert!(text.contains("localization error (gp)") && text.contains("posterior std"), "{text}");
+    assert!(
+        text.contains("localization error (gp)") && text.contains("posterior std"),
+        "{text}"
+    );
 
     // Unknown sessions and bad localizers are refused with a message.
     let out = Command::new(BIN)
@@ -164,7 +230,13 @@ fn sessions_lists_and_evaluate_judges_what_was_collected() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("session 99"));
     let out = Command::new(BIN)
-        .args(["evaluate", "--building", &fixture("area-one.json"), "--localizer", "knn:0"])
+        .args([
+            "evaluate",
+            "--building",
+            &fixture("area-one.json"),
+            "--localizer",
+            "knn:0",
+        ])
         .output()
         .expect("run");
     assert!(!out.status.success());

@@ -281,8 +281,14 @@ fn weighted_knn_matches_a_hand_computation() {
 #[test]
 fn localizer_names_parse_and_bad_ones_are_refused() {
     assert_eq!(Localizer::parse("gp").expect("gp"), Localizer::Gp);
-    assert_eq!(Localizer::parse("knn").expect("knn"), Localizer::Knn { k: 3 });
-    assert_eq!(Localizer::parse("knn:5").expect("knn:5"), Localizer::Knn { k: 5 });
+    assert_eq!(
+        Localizer::parse("knn").expect("knn"),
+        Localizer::Knn { k: 3 }
+    );
+    assert_eq!(
+        Localizer::parse("knn:5").expect("knn:5"),
+        Localizer::Knn { k: 5 }
+    );
     for bad in ["knn:0", "knn:x", "nearest", ""] {
         let e = Localizer::parse(bad).expect_err(bad).to_string();
         assert!(e.contains("localizer") && e.contains(bad), "{e}");
@@ -295,11 +301,16 @@ fn both_localizers_locate_a_dense_walk_on_area_two() {
     let ev = Evaluator::new(&b, &AREA_TWO, EvalOptions::default()).expect("evaluator");
     let pts = dense_points(&b);
     let gp = ev.evaluate_with(&pts, 1, Localizer::Gp).expect("gp");
-    let knn = ev.evaluate_with(&pts, 1, Localizer::Knn { k: 3 }).expect("knn");
+    let knn = ev
+        .evaluate_with(&pts, 1, Localizer::Knn { k: 3 })
+        .expect("knn");
     assert_eq!(gp, ev.evaluate(&pts, 1).expect("default"));
     assert_eq!(knn.errors_m.len(), b.test_points.len());
     // Both are metre-level on a dense map of a 63 m corridor; they are different methods.
-    assert!(gp.mean_error_m < 6.0 && knn.mean_error_m < 6.0, "{gp:?} {knn:?}");
+    assert!(
+        gp.mean_error_m < 6.0 && knn.mean_error_m < 6.0,
+        "{gp:?} {knn:?}"
+    );
     assert_ne!(gp.errors_m, knn.errors_m);
 }
 
@@ -317,14 +328,21 @@ fn collected_fingerprints_are_judged_on_their_own_readings() {
         })
         .collect();
     let opts = EvalOptions::default();
-    let full = evaluate_collected(&b, &AREA_TWO, &collected, &opts, Localizer::Gp, 1).expect("eval");
-    let loc = full.localization.as_ref().expect("test points are measured");
+    let full =
+        evaluate_collected(&b, &AREA_TWO, &collected, &opts, Localizer::Gp, 1).expect("eval");
+    let loc = full
+        .localization
+        .as_ref()
+        .expect("test points are measured");
     assert_eq!(loc.errors_m.len(), b.test_points.len());
     assert_eq!(full.collected, collected.len());
     let none = evaluate_collected(&b, &AREA_TWO, &[], &opts, Localizer::Gp, 1).expect("pilot only");
     // More fingerprints: a better map and less uncertainty everywhere.
     let none_loc = none.localization.as_ref().expect("pilot map");
-    assert!(loc.mean_error_m < none_loc.mean_error_m, "{loc:?} vs {none_loc:?}");
+    assert!(
+        loc.mean_error_m < none_loc.mean_error_m,
+        "{loc:?} vs {none_loc:?}"
+    );
     assert!(full.std_mean_db < none.std_mean_db && full.std_max_db <= none.std_max_db);
     let knn = evaluate_collected(&b, &AREA_TWO, &collected, &opts, Localizer::Knn { k: 3 }, 1)
         .expect("knn");

@@ -644,7 +644,10 @@ pub fn evaluate_collected(
             building.name
         )));
     }
-    let mut noise: Vec<f64> = collected.iter().map(|c| kernel.sn2 + c.extra_noise).collect();
+    let mut noise: Vec<f64> = collected
+        .iter()
+        .map(|c| kernel.sn2 + c.extra_noise)
+        .collect();
     noise.resize(train.len(), kernel.sn2);
     let nc = collected.len();
     let values = DMatrix::from_fn(train.len(), aps.len(), |i, a| {
@@ -664,7 +667,11 @@ pub fn evaluate_collected(
     }
     // Coverage: latent posterior standard deviation on the grid.
     let gp0 = GpModel::fit_with_noise(kernel, &train, &noise, &DMatrix::zeros(train.len(), 1))?;
-    let std: Vec<f64> = gp0.variance(&grid).into_iter().map(|v| v.max(0.0).sqrt()).collect();
+    let std: Vec<f64> = gp0
+        .variance(&grid)
+        .into_iter()
+        .map(|v| v.max(0.0).sqrt())
+        .collect();
     let (std_mean, std_median, std_p90) = summary(&std);
     let std_max = std.iter().copied().fold(0.0, f64::max);
 
@@ -689,7 +696,11 @@ pub fn evaluate_collected(
             );
             None
         } else {
-            let truths: Vec<Point> = building.test_points.iter().map(Fingerprint::point).collect();
+            let truths: Vec<Point> = building
+                .test_points
+                .iter()
+                .map(Fingerprint::point)
+                .collect();
             let world_aps = world.as_ref().map(WorldModel::ap_ids).unwrap_or_default();
             let world_mean = world.as_ref().map(|w| w.mean(&truths));
             let mut rng = stream_rng(seed, STREAM_TEST);

@@ -53,8 +53,8 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-pub use posterior::IncrementalPosterior;
 pub use log::{LogEntry, LogEvent, MemoryLog, PlanData, SessionLog, SessionRow};
+pub use posterior::IncrementalPosterior;
 pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
 pub use tracker::Tracker;
 pub use types::*;
@@ -268,7 +268,9 @@ impl Session {
                 // `replan`), so replay recovers it without planning.
                 let (_, left) = self.tracker.replan_origin(&b).map_err(bad)?;
                 let reserve = (left.max(0.0) - plan.record.budget_m).max(0.0);
-                self.tracker.apply_replan(&b, &walk, entry.seq).map_err(bad)?;
+                self.tracker
+                    .apply_replan(&b, &walk, entry.seq)
+                    .map_err(bad)?;
                 self.reserve_m = reserve;
                 return Ok(());
             }
@@ -423,7 +425,8 @@ impl Session {
         // for that way home.
         let reserve_for = |this: &Self, h: f64| {
             if keep {
-                this.deviation_reserve(h, &to_end).clamp(0.0, left_for_plan - home)
+                this.deviation_reserve(h, &to_end)
+                    .clamp(0.0, left_for_plan - home)
             } else {
                 0.0
             }

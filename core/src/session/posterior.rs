@@ -108,7 +108,7 @@ impl IncrementalPosterior {
         let mut logdet_a = 0.0;
         for k in 0..nv {
             let p = r[k * nv + k];
-            if !(p > 0.0) || !p.is_finite() {
+            if !(p.is_finite() && p > 0.0) {
                 return Err(Error::Numerical(
                     "K_VV + sn2 I is not positive definite".into(),
                 ));
@@ -166,7 +166,8 @@ impl IncrementalPosterior {
         let kern = self.kernel;
         // k_Sx and l = L^-1 k_Sx.
         self.scratch_k.clear();
-        self.scratch_k.extend(self.pts.iter().map(|q| kern.k(q, &p)));
+        self.scratch_k
+            .extend(self.pts.iter().map(|q| kern.k(q, &p)));
         self.scratch_l.clear();
         self.scratch_l.resize(n, 0.0);
         for i in 0..n {
@@ -175,7 +176,7 @@ impl IncrementalPosterior {
             self.scratch_l[i] = (self.scratch_k[i] - s) / row[i];
         }
         let d2 = kern.sf2 + kern.sn2 + extra_noise - dot(&self.scratch_l, &self.scratch_l);
-        if !(d2 > 0.0) || !d2.is_finite() {
+        if !(d2.is_finite() && d2 > 0.0) {
             return Err(Error::Numerical(format!(
                 "K_SS + N_S lost positive definiteness at observation {} ({:.3}, {:.3}, floor {})",
                 n + 1,
@@ -213,7 +214,7 @@ impl IncrementalPosterior {
         }
         let qq = dot(q, q);
         let rho2 = 1.0 - qq;
-        if !(rho2 > 0.0) || !rho2.is_finite() {
+        if !(rho2.is_finite() && rho2 > 0.0) {
             return Err(Error::Numerical(
                 "posterior covariance of the vertices lost positive definiteness".into(),
             ));

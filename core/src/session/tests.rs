@@ -630,13 +630,26 @@ fn incremental_progress_equals_a_from_scratch_computation() {
                     .collect::<Vec<_>>(),
             )?;
             let rel = (p.collected_utility_nats - scratch).abs() / scratch.max(1e-300);
-            assert!(rel < 1e-9, "{} vs {scratch} (rel {rel:e})", p.collected_utility_nats);
+            assert!(
+                rel < 1e-9,
+                "{} vs {scratch} (rel {rel:e})",
+                p.collected_utility_nats
+            );
             let rel_ref = (p.collected_utility_nats - reference).abs() / reference;
-            assert!(rel_ref < 1e-9, "{} vs reference {reference}", p.collected_utility_nats);
+            assert!(
+                rel_ref < 1e-9,
+                "{} vs reference {reference}",
+                p.collected_utility_nats
+            );
             for (u, want) in p.uncertainty.iter().zip(uncertainty_from_scratch(sess)) {
                 let err = (u.std_db - want).abs();
                 worst = worst.max(err);
-                assert!(err < 1e-7 * (1.0 + want), "vertex {}: {} vs {want}", u.vertex, u.std_db);
+                assert!(
+                    err < 1e-7 * (1.0 + want),
+                    "vertex {}: {} vs {want}",
+                    u.vertex,
+                    u.std_db
+                );
             }
             checked += 1;
             Ok(())
@@ -652,8 +665,7 @@ fn incremental_progress_equals_a_from_scratch_computation() {
 fn a_robot_that_follows_the_plan_gets_no_reserve_and_exactly_the_planned_utility() {
     let (_, mut s) = demo_session(Surveyor::robot(), 80.0);
     let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-    let (sum, _) =
-        simulate(&mut s, &world, &SimOptions::default(), |_, _, _| Ok(())).expect("sim");
+    let (sum, _) = simulate(&mut s, &world, &SimOptions::default(), |_, _, _| Ok(())).expect("sim");
     assert_eq!(sum.replans, 0);
     assert_eq!(s.reserve_m(), 0.0);
     assert!(!s.guidance().message.contains("reserve"));

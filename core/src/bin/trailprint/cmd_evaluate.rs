@@ -138,7 +138,10 @@ fn run_session(a: &Args, id: i64, db: Option<&std::path::Path>) -> Result<()> {
     // The session's own kernel (its plan's) unless one is given.
     let (kernel, source) = match a.kernel.kernel {
         Some(k) => (k, "option"),
-        None => (SessionLog::load_plan(&store, row.plan_id)?.record.kernel, "plan"),
+        None => (
+            SessionLog::load_plan(&store, row.plan_id)?.record.kernel,
+            "plan",
+        ),
     };
     let collected: Vec<LabelledFingerprint> = store
         .list_collected(BuildingRef::Id(row.building_id), Some(id))?

@@ -102,7 +102,14 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
         .max(8);
     println!(
         "{:>4}  {:<width$}  {:<8} {:<8} {:>9} {:>8} {:>7} {:>7} {:>9}",
-        "id", "building", "surveyor", "status", "walked_m", "budget_m", "samples", "replans",
+        "id",
+        "building",
+        "surveyor",
+        "status",
+        "walked_m",
+        "budget_m",
+        "samples",
+        "replans",
         "utility"
     );
     let num = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |x| format!("{x:.p$}"));
@@ -118,7 +125,10 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
             r.samples,
             r.replans.map_or("-".to_string(), |x| x.to_string()),
             num(r.collected_utility_nats, 2),
-            r.note.as_ref().map(|n| format!("  ({n})")).unwrap_or_default()
+            r.note
+                .as_ref()
+                .map(|n| format!("  ({n})"))
+                .unwrap_or_default()
         );
     }
     Ok(())
