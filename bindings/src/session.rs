@@ -39,6 +39,7 @@ impl From<SessionOptions> for core::SessionOptions {
             auto_replan: o.auto_replan,
             calibration_weight_steps: o.calibration_weight_steps,
             seed: o.seed,
+            ..core::SessionOptions::default()
         }
     }
 }
@@ -384,6 +385,8 @@ pub struct ReplanOutcome {
     pub budget_left_m: f64,
     /// The budget left cannot reach the end: the walk is the shortest way there.
     pub over_budget: bool,
+    /// Metres of the budget left kept back for wrong turns still to come.
+    pub reserve_m: f64,
     pub utility_nats: f64,
 }
 
@@ -397,6 +400,7 @@ impl From<core::ReplanOutcome> for ReplanOutcome {
             length_m: r.length_m,
             budget_left_m: r.budget_left_m,
             over_budget: r.over_budget,
+            reserve_m: r.reserve_m,
             utility_nats: r.utility_nats,
         }
     }

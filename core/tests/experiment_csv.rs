@@ -80,6 +80,9 @@ fn small_experiment_writes_the_documented_tables() {
             "{row:?}"
         );
         assert!(["completed", "optimal", "time_limit"].contains(&row[11].as_str()));
+        // Both localizers are reported: the GP likelihood and weighted kNN.
+        let knn: f64 = row[14].parse().expect("knn mean error");
+        assert!(knn.is_finite() && knn >= 0.0, "{row:?}");
         let walk: Vec<&str> = row[13].split(' ').collect();
         assert_eq!((walk[0], walk[walk.len() - 1]), ("r0c0", "r0c0"));
     }
@@ -119,6 +122,12 @@ fn small_experiment_writes_the_documented_tables() {
     assert_eq!(base[0][0], "pilot-only");
     assert_eq!(base[1][0], "dense-survey");
     assert_eq!(base[1][1], b.dense_survey.len().to_string());
+    let knn_dense: f64 = base[1][5].parse().expect("knn baseline");
+    let knn_pilot: f64 = base[0][5].parse().expect("knn baseline");
+    assert!(
+        knn_dense < knn_pilot,
+        "kNN on the dense survey beats the pilot data: {base:?}"
+    );
 
     let scatter = exp.scatter_chart();
     assert!(

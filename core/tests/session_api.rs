@@ -146,14 +146,17 @@ fn replanned_walks_start_at_the_current_vertex_and_fit_the_budget_left() {
             let b = s.building();
             let walk = b.resolve_walk(&p.walk).expect("a walk of the building");
             let len = b.walk_length(&walk);
-            // Replay the log up to the check-in: the budget left then is the plan's budget.
+            // Replay the log up to the check-in: the budget left then.
             let before = Session::replay_to(store.clone(), s.id(), e.seq - 1).expect("replay");
             let (origin, left) = before
                 .tracker()
                 .replan_origin(b)
                 .expect("origin before the replan");
             assert_eq!(b.vertices[origin].id, vertex);
-            assert!((p.budget_m - left.max(0.0)).abs() < 1e-9);
+            // The plan's budget is what was left less the reserve kept for wrong turns.
+            let after = Session::replay_to(store.clone(), s.id(), e.seq).expect("replay");
+            assert!(after.reserve_m() >= 0.0);
+            assert!((p.budget_m + after.reserve_m() - left.max(0.0)).abs() < 1e-9);
             let shortest = distances_from(b, walk[walk.len() - 1])[walk[0]];
             assert!(
                 len <= left + 1e-9 || (shortest > left && (len - shortest).abs() < 1e-9),

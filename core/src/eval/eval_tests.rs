@@ -249,3 +249,102 @@ fn missing_test_points_or_data_are_errors() {
     let ev = Evaluator::new(&np, &DEMO, EvalOptions::default()).expect("evaluator");
     assert!(ev.evaluate(&[], 1).is_err());
 }
+
+#[test]
+fn weighted_knn_matches_a_hand_computation() {
+    // One access point. A (0,0) -40, B (10,0) -60, C (0,10) -80 on floor 0; D (20,0) -50 on
+    // floor 1.
+    let points = [
+        Point::new(0.0, 0.0, 0),
+        Point::new(10.0, 0.0, 0),
+        Point::new(0.0, 10.0, 0),
+        Point::new(20.0, 0.0, 1),
+    ];
+    let values = DMatrix::from_column_slice(4, 1, &[-40.0, -60.0, -80.0, -50.0]);
+    // z = -45: distances A 5, D 5, B 15 (C 35 is out); weights 1/6, 1/6, 1/16. Floor 0
+    // weighs 1/6 + 1/16 > 1/6, so floor 0, at x = (0/6 + 10/16) / (1/6 + 1/16) = 30/11.
+    let p = knn_locate(&[-45.0], &points, &values, 3);
+    assert_eq!(p.floor, 0);
+    assert!((p.x - 30.0 / 11.0).abs() < 1e-12, "{p:?}");
+    assert!(p.y.abs() < 1e-12);
+    // z = -50: D at distance 0 weighs 1, A and B 1/11 each: floor 1, exactly at D.
+    let p = knn_locate(&[-50.0], &points, &values, 3);
+    assert_eq!(p, Point::new(20.0, 0.0, 1));
+    // k = 1 is nearest neighbour; k larger than the map uses all of it.
+    assert_eq!(knn_locate(&[-79.0], &points, &values, 1), points[2]);
+    let all = knn_locate(&[-60.0], &points[..3], &values.rows(0, 3).into_owned(), 10);
+    // Weights 1/21, 1/1, 1/21: x = 10 / (1 + 2/21) * 1, y = (10/21) / (1 + 2/21).
+    let wsum = 1.0 + 2.0 / 21.0;
+    assert!((all.x - 10.0 / wsum).abs() < 1e-12 && (all.y - (10.0 / 21.0) / wsum).abs() < 1e-12);
+}
+
+#[test]
+fn localizer_names_parse_and_bad_ones_are_refused() {
+    assert_eq!(Localizer::parse("gp").expect("gp"), Localizer::Gp);
+    assert_eq!(
+        Localizer::parse("knn").expect("knn"),
+        Localizer::Knn { k: 3 }
+    );
+    assert_eq!(
+        Localizer::parse("knn:5").expect("knn:5"),
+        Localizer::Knn { k: 5 }
+    );
+    for bad in ["knn:0", "knn:x", "nearest", ""] {
+        let e = Localizer::parse(bad).expect_err(bad).to_string();
+        assert!(e.contains("localizer") && e.contains(bad), "{e}");
+    }
+}
+
+#[test]
+fn both_localizers_locate_a_dense_walk_on_area_two() {
+    let b = fixture("area-two.json");
+    let ev = Evaluator::new(&b, &AREA_TWO, EvalOptions::default()).expect("evaluator");
+    let pts = dense_points(&b);
+    let gp = ev.evaluate_with(&pts, 1, Localizer::Gp).expect("gp");
+    let knn = ev
+        .evaluate_with(&pts, 1, Localizer::Knn { k: 3 })
+        .expect("knn");
+    assert_eq!(gp, ev.evaluate(&pts, 1).expect("default"));
+    assert_eq!(knn.errors_m.len(), b.test_points.len());
+    // Both are metre-level on a dense map of a 63 m corridor; they are different methods.
+    assert!(
+        gp.mean_error_m < 6.0 && knn.mean_error_m < 6.0,
+        "{gp:?} {knn:?}"
+    );
+    assert_ne!(gp.errors_m, knn.errors_m);
+}
+
+#[test]
+fn collected_fingerprints_are_judged_on_their_own_readings() {
+    let b = fixture("area-two.json");
+    // The dense survey's own measured fingerprints, taken as if a session collected them.
+    let collected: Vec<LabelledFingerprint> = b
+        .dense_survey
+        .iter()
+        .map(|f| LabelledFingerprint {
+            pos: f.point(),
+            extra_noise: 0.0,
+            rss: f.rss.clone(),
+        })
+        .collect();
+    let opts = EvalOptions::default();
+    let full =
+        evaluate_collected(&b, &AREA_TWO, &collected, &opts, Localizer::Gp, 1).expect("eval");
+    let loc = full
+        .localization
+        .as_ref()
+        .expect("test points are measured");
+    assert_eq!(loc.errors_m.len(), b.test_points.len());
+    assert_eq!(full.collected, collected.len());
+    let none = evaluate_collected(&b, &AREA_TWO, &[], &opts, Localizer::Gp, 1).expect("pilot only");
+    // More fingerprints: a better map and less uncertainty everywhere.
+    let none_loc = none.localization.as_ref().expect("pilot map");
+    assert!(
+        loc.mean_error_m < none_loc.mean_error_m,
+        "{loc:?} vs {none_loc:?}"
+    );
+    assert!(full.std_mean_db < none.std_mean_db && full.std_max_db <= none.std_max_db);
+    let knn = evaluate_collected(&b, &AREA_TWO, &collected, &opts, Localizer::Knn { k: 3 }, 1)
+        .expect("knn");
+    assert!(knn.localization.expect("knn").mean_error_m.is_finite());
+}

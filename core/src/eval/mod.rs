@@ -81,6 +81,90 @@ impl EvalOptions {
     }
 }
 
+/// How a test fingerprint is located on the fingerprint map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Localizer {
+    /// The paper's method (SPEC section 5): one GP per access point predicts mean and
+    /// variance on the reference grid; the grid point of highest likelihood wins.
+    Gp,
+    /// Weighted k nearest neighbours in signal space, as most deployed engines do: the
+    /// `k` training fingerprints (samples and pilot data) nearest to the test fingerprint
+    /// (Euclidean distance over all access points, a missing reading = -100 dBm), weighted
+    /// by `1 / (distance + 1 dB)`. The floor is the one of largest total weight (the lower
+    /// on a tie) and the position the weighted mean of the neighbours on that floor.
+    Knn { k: usize },
+}
+
+impl Localizer {
+    /// Parses `gp`, `knn` (k = 3) or `knn:K`.
+    pub fn parse(s: &str) -> Result<Self> {
+        let bad = || {
+            Error::InvalidRequest(format!(
+                "localizer must be gp, knn or knn:K (K a whole number >= 1), got {s:?}"
+            ))
+        };
+        match s.trim() {
+            "gp" => Ok(Localizer::Gp),
+            "knn" => Ok(Localizer::Knn { k: 3 }),
+            t => {
+                let k = t.strip_prefix("knn:").ok_or_else(bad)?;
+                let k: usize = k.parse().map_err(|_| bad())?;
+                if k == 0 {
+                    return Err(bad());
+                }
+                Ok(Localizer::Knn { k })
+            }
+        }
+    }
+
+    /// `gp` or `knn:K`.
+    pub fn name(&self) -> String {
+        match self {
+            Localizer::Gp => "gp".into(),
+            Localizer::Knn { k } => format!("knn:{k}"),
+        }
+    }
+}
+
+/// Softening of the kNN weights, dB: a neighbour at distance 0 weighs 1, not infinity.
+const KNN_SOFTENING_DB: f64 = 1.0;
+
+/// Where weighted kNN puts the fingerprint `z` (see [`Localizer::Knn`]); `values` has one
+/// row per training fingerprint at `points`.
+pub fn knn_locate(z: &[f64], points: &[Point], values: &DMatrix<f64>, k: usize) -> Point {
+    let mut d: Vec<(f64, usize)> = (0..points.len())
+        .map(|i| {
+            let sq: f64 = z
+                .iter()
+                .enumerate()
+                .map(|(a, za)| (za - values[(i, a)]) * (za - values[(i, a)]))
+                .sum();
+            (sq.sqrt(), i)
+        })
+        .collect();
+    d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    d.truncate(k.max(1));
+    let mut floors: Vec<(i64, f64)> = Vec::new();
+    for &(dist, i) in &d {
+        let w = 1.0 / (dist + KNN_SOFTENING_DB);
+        match floors.iter_mut().find(|(f, _)| *f == points[i].floor) {
+            Some(e) => e.1 += w,
+            None => floors.push((points[i].floor, w)),
+        }
+    }
+    floors.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    let floor = floors.first().map_or(0, |f| f.0);
+    let (mut x, mut y, mut wsum) = (0.0, 0.0, 0.0);
+    for &(dist, i) in d.iter().filter(|(_, i)| points[*i].floor == floor) {
+        let w = 1.0 / (dist + KNN_SOFTENING_DB);
+        x += w * points[i].x;
+        y += w * points[i].y;
+        wsum += w;
+    }
+    Point::new(x / wsum, y / wsum, floor)
+}
+
 /// The outcome of one evaluation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LocalizationReport {
@@ -334,16 +418,36 @@ impl Evaluator {
     /// fingerprints use separate streams, so the drawn test fingerprints do not depend on
     /// the samples.
     pub fn evaluate(&self, sample_points: &[Point], seed: u64) -> Result<LocalizationReport> {
-        self.evaluate_inner(sample_points, None, seed)
+        self.evaluate_inner(sample_points, None, seed, Localizer::Gp)
+    }
+
+    /// As [`Evaluator::evaluate`] with another localizer.
+    pub fn evaluate_with(
+        &self,
+        sample_points: &[Point],
+        seed: u64,
+        localizer: Localizer,
+    ) -> Result<LocalizationReport> {
+        self.evaluate_inner(sample_points, None, seed, localizer)
     }
 
     /// As [`Evaluator::evaluate`] for the samples of [`crate::samples::sample_walk`]: a
     /// human sample's label noise (SPEC section 4) is added to `sn2` in the map's GP, as
     /// the planner assumes. The fingerprint itself is drawn at the sample's true position.
     pub fn evaluate_samples(&self, samples: &[Sample], seed: u64) -> Result<LocalizationReport> {
+        self.evaluate_samples_with(samples, seed, Localizer::Gp)
+    }
+
+    /// As [`Evaluator::evaluate_samples`] with another localizer.
+    pub fn evaluate_samples_with(
+        &self,
+        samples: &[Sample],
+        seed: u64,
+        localizer: Localizer,
+    ) -> Result<LocalizationReport> {
         let points: Vec<Point> = samples.iter().map(|s| s.pos).collect();
         let extra: Vec<f64> = samples.iter().map(|s| s.extra_noise).collect();
-        self.evaluate_inner(&points, Some(&extra), seed)
+        self.evaluate_inner(&points, Some(&extra), seed, localizer)
     }
 
     fn evaluate_inner(
@@ -351,6 +455,7 @@ impl Evaluator {
         sample_points: &[Point],
         extra_noise: Option<&[f64]>,
         seed: u64,
+        localizer: Localizer,
     ) -> Result<LocalizationReport> {
         let m = self.aps.len();
         let sd = self.kernel.sn2.sqrt();
@@ -394,35 +499,17 @@ impl Evaluator {
                 *n += x;
             }
         }
-        let gp = GpModel::fit_with_noise(&self.kernel, &train, &noise, &values)?;
-        let pred = gp.predict(&self.grid);
-
-        // Localize every test fingerprint at the most likely grid point.
-        let total_var: Vec<f64> = pred.variance.iter().map(|v| v + self.kernel.sn2).collect();
-        let log_norm: Vec<f64> = total_var.iter().map(|v| -0.5 * m as f64 * v.ln()).collect();
-        // Row-major copy of the means: one contiguous slice of m values per grid point.
-        let mu: Vec<f64> = pred.mean.transpose().as_slice().to_vec();
-        let errors: Vec<f64> = tests
-            .par_iter()
-            .zip(self.test_points.par_iter())
-            .map(|(z, truth)| {
-                let mut best = (f64::NEG_INFINITY, 0usize);
-                for (g, mu_g) in mu.chunks_exact(m).enumerate() {
-                    let sq: f64 = z
-                        .iter()
-                        .zip(mu_g)
-                        .map(|(za, ma)| (za - ma) * (za - ma))
-                        .sum();
-                    let ll = log_norm[g] - 0.5 * sq / total_var[g];
-                    if ll > best.0 {
-                        best = (ll, g);
-                    }
-                }
-                let at = &self.grid[best.1];
-                at.planar_distance(truth)
-                    + self.options.floor_penalty_m * (at.floor - truth.floor).unsigned_abs() as f64
-            })
-            .collect();
+        let errors = locate_all(
+            &self.kernel,
+            &self.options,
+            &self.grid,
+            &train,
+            &noise,
+            &values,
+            &tests,
+            &self.test_points,
+            localizer,
+        )?;
 
         let (mean, median, p90) = summary(&errors);
         Ok(LocalizationReport {
@@ -435,6 +522,235 @@ impl Evaluator {
             grid_points: self.grid.len(),
         })
     }
+}
+
+/// The localization error of every test fingerprint `tests[t]` (true position
+/// `truths[t]`) on the map built from `values` (rows: training fingerprints at `train`
+/// with noise `noise`; columns: access points).
+#[allow(clippy::too_many_arguments)]
+fn locate_all(
+    kernel: &Kernel,
+    options: &EvalOptions,
+    grid: &[Point],
+    train: &[Point],
+    noise: &[f64],
+    values: &DMatrix<f64>,
+    tests: &[Vec<f64>],
+    truths: &[Point],
+    localizer: Localizer,
+) -> Result<Vec<f64>> {
+    let error = |at: &Point, truth: &Point| {
+        at.planar_distance(truth)
+            + options.floor_penalty_m * (at.floor - truth.floor).unsigned_abs() as f64
+    };
+    let k = match localizer {
+        Localizer::Knn { k } => k,
+        Localizer::Gp => {
+            let m = values.ncols();
+            let gp = GpModel::fit_with_noise(kernel, train, noise, values)?;
+            let pred = gp.predict(grid);
+            // Localize every test fingerprint at the most likely grid point.
+            let total_var: Vec<f64> = pred.variance.iter().map(|v| v + kernel.sn2).collect();
+            let log_norm: Vec<f64> = total_var.iter().map(|v| -0.5 * m as f64 * v.ln()).collect();
+            // Row-major copy of the means: one contiguous slice of m values per grid point.
+            let mu: Vec<f64> = pred.mean.transpose().as_slice().to_vec();
+            return Ok(tests
+                .par_iter()
+                .zip(truths.par_iter())
+                .map(|(z, truth)| {
+                    let mut best = (f64::NEG_INFINITY, 0usize);
+                    for (g, mu_g) in mu.chunks_exact(m).enumerate() {
+                        let sq: f64 = z
+                            .iter()
+                            .zip(mu_g)
+                            .map(|(za, ma)| (za - ma) * (za - ma))
+                            .sum();
+                        let ll = log_norm[g] - 0.5 * sq / total_var[g];
+                        if ll > best.0 {
+                            best = (ll, g);
+                        }
+                    }
+                    error(&grid[best.1], truth)
+                })
+                .collect());
+        }
+    };
+    Ok(tests
+        .par_iter()
+        .zip(truths.par_iter())
+        .map(|(z, truth)| error(&knn_locate(z, train, values, k), truth))
+        .collect())
+}
+
+/// What the fingerprints a session collected are worth (see [`evaluate_collected`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CollectedReport {
+    /// Localization error on the building's test points (`None` when it has none, or
+    /// they carry no measured fingerprint and there is no dense survey to draw them from).
+    pub localization: Option<LocalizationReport>,
+    /// Why there is no localization error, when there is none.
+    pub localization_note: Option<String>,
+    pub localizer: Localizer,
+    /// Fingerprints used: collected ones, and pilot ones.
+    pub collected: usize,
+    pub pilot: usize,
+    pub access_points: usize,
+    /// Posterior standard deviation of the latent RSS on the reference grid, given the
+    /// pilot and collected positions (with their label noise): mean, median, 90th
+    /// percentile and largest, dB.
+    pub std_mean_db: f64,
+    pub std_median_db: f64,
+    pub std_p90_db: f64,
+    pub std_max_db: f64,
+    pub grid_points: usize,
+}
+
+/// One collected fingerprint: its labelled position, the extra noise of its label (dB²,
+/// `Kernel::label_noise` of its position error) and its readings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelledFingerprint {
+    pub pos: Point,
+    pub extra_noise: f64,
+    pub rss: std::collections::BTreeMap<String, f64>,
+}
+
+/// Judges fingerprints actually collected (for example by a survey session), not a walk
+/// re-sampled from a world model: the map is built from their measured readings plus the
+/// pilot data; test fingerprints are the measured `rss` of the building's `test_points`,
+/// drawn from the dense-survey world model (seed `seed`) where a test point has none. The
+/// access points are those heard in the collected and pilot fingerprints.
+pub fn evaluate_collected(
+    building: &Building,
+    kernel: &Kernel,
+    collected: &[LabelledFingerprint],
+    options: &EvalOptions,
+    localizer: Localizer,
+    seed: u64,
+) -> Result<CollectedReport> {
+    kernel.validate("evaluation kernel")?;
+    options.validate()?;
+    let set: std::collections::BTreeSet<&String> = collected
+        .iter()
+        .flat_map(|c| c.rss.keys())
+        .chain(building.pilot.iter().flat_map(|f| f.rss.keys()))
+        .collect();
+    let aps: Vec<String> = set.into_iter().cloned().collect();
+    let mut train: Vec<Point> = collected.iter().map(|c| c.pos).collect();
+    train.extend(building.pilot_points());
+    if train.is_empty() {
+        return Err(Error::InvalidRequest(format!(
+            "building {:?}: nothing to build a fingerprint map from (no collected \
+             fingerprints and no pilot data)",
+            building.name
+        )));
+    }
+    let mut noise: Vec<f64> = collected
+        .iter()
+        .map(|c| kernel.sn2 + c.extra_noise)
+        .collect();
+    noise.resize(train.len(), kernel.sn2);
+    let nc = collected.len();
+    let values = DMatrix::from_fn(train.len(), aps.len(), |i, a| {
+        let rss = if i < nc {
+            &collected[i].rss
+        } else {
+            &building.pilot[i - nc].rss
+        };
+        rss.get(&aps[a]).copied().unwrap_or(MISSING_DBM)
+    });
+    let grid = reference_grid(building, options.grid_step_m, options.grid_margin_m);
+    if grid.is_empty() {
+        return Err(Error::InvalidRequest(format!(
+            "building {:?}: the reference grid is empty",
+            building.name
+        )));
+    }
+    // Coverage: latent posterior standard deviation on the grid.
+    let gp0 = GpModel::fit_with_noise(kernel, &train, &noise, &DMatrix::zeros(train.len(), 1))?;
+    let std: Vec<f64> = gp0
+        .variance(&grid)
+        .into_iter()
+        .map(|v| v.max(0.0).sqrt())
+        .collect();
+    let (std_mean, std_median, std_p90) = summary(&std);
+    let std_max = std.iter().copied().fold(0.0, f64::max);
+
+    let mut note = None;
+    let localization = if building.test_points.is_empty() {
+        note = Some("the building has no test_points".to_string());
+        None
+    } else if aps.is_empty() {
+        note = Some("no access point was heard in the collected or pilot fingerprints".into());
+        None
+    } else {
+        let needs_world = building.test_points.iter().any(|t| t.rss.is_empty());
+        let world = if needs_world && !building.dense_survey.is_empty() {
+            Some(WorldModel::from_dense_survey(building, kernel)?)
+        } else {
+            None
+        };
+        if needs_world && world.is_none() {
+            note = Some(
+                "test points without measured rss and no dense_survey to draw them from"
+                    .to_string(),
+            );
+            None
+        } else {
+            let truths: Vec<Point> = building
+                .test_points
+                .iter()
+                .map(Fingerprint::point)
+                .collect();
+            let world_aps = world.as_ref().map(WorldModel::ap_ids).unwrap_or_default();
+            let world_mean = world.as_ref().map(|w| w.mean(&truths));
+            let mut rng = stream_rng(seed, STREAM_TEST);
+            let sd = kernel.sn2.sqrt();
+            let tests: Vec<Vec<f64>> = building
+                .test_points
+                .iter()
+                .enumerate()
+                .map(|(t, tp)| {
+                    aps.iter()
+                        .map(|a| {
+                            if !tp.rss.is_empty() {
+                                return tp.rss.get(a).copied().unwrap_or(MISSING_DBM);
+                            }
+                            match (world_aps.iter().position(|w| w == a), &world_mean) {
+                                (Some(c), Some(m)) => m[(t, c)] + sd * normal(&mut rng),
+                                _ => MISSING_DBM,
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            let errors = locate_all(
+                kernel, options, &grid, &train, &noise, &values, &tests, &truths, localizer,
+            )?;
+            let (mean, median, p90) = summary(&errors);
+            Some(LocalizationReport {
+                mean_error_m: mean,
+                median_error_m: median,
+                p90_error_m: p90,
+                errors_m: errors,
+                samples: nc,
+                access_points: aps.len(),
+                grid_points: grid.len(),
+            })
+        }
+    };
+    Ok(CollectedReport {
+        localization,
+        localization_note: note,
+        localizer,
+        collected: nc,
+        pilot: building.pilot.len(),
+        access_points: aps.len(),
+        std_mean_db: std_mean,
+        std_median_db: std_median,
+        std_p90_db: std_p90,
+        std_max_db: std_max,
+        grid_points: grid.len(),
+    })
 }
 
 /// Mean, median and 90th percentile (linear interpolation between order statistics).

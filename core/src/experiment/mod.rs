@@ -34,7 +34,7 @@ use std::time::Duration;
 use serde::Serialize;
 
 use crate::building::Building;
-use crate::eval::{EvalOptions, Evaluator, LocalizationReport};
+use crate::eval::{EvalOptions, Evaluator, LocalizationReport, Localizer};
 use crate::gp::Kernel;
 use crate::plan::{Algorithm, Control, Params, PlanRequest, PlanResult, Termination, plan};
 use crate::samples::{SurveyorModel, sample_walk};
@@ -210,6 +210,9 @@ pub struct RunRecord {
     pub mean_error_m: f64,
     pub median_error_m: f64,
     pub p90_error_m: f64,
+    /// Mean localization error of the same fingerprints located by weighted kNN (k = 3)
+    /// instead of the GP likelihood, metres.
+    pub knn_mean_error_m: f64,
     pub termination: Termination,
     /// Whether the walk was reused from run 0 (seed-independent algorithms).
     pub reused: bool,
@@ -235,6 +238,8 @@ pub struct SummaryRow {
     pub error_sd_m: f64,
     pub median_error_mean_m: f64,
     pub p90_error_mean_m: f64,
+    /// Mean over the runs of the kNN (k = 3) mean error, metres.
+    pub knn_error_mean_m: f64,
     /// Runs stopped by the time limit.
     pub time_limited: usize,
     pub elapsed_mean_ms: f64,
@@ -263,6 +268,8 @@ pub struct Baseline {
     pub mean_error_m: f64,
     pub median_error_m: f64,
     pub p90_error_m: f64,
+    /// Mean error with weighted kNN (k = 3) instead of the GP likelihood, metres.
+    pub knn_mean_error_m: f64,
 }
 
 /// Everything an experiment produced.
@@ -369,6 +376,7 @@ pub fn run_experiment(
                     &config.kernel,
                 )?;
                 let rep: LocalizationReport = evaluator.evaluate_samples(&smp, es)?;
+                let knn = evaluator.evaluate_samples_with(&smp, es, Localizer::Knn { k: 3 })?;
                 let rec = RunRecord {
                     algorithm,
                     budget_m: budget,
@@ -381,6 +389,7 @@ pub fn run_experiment(
                     mean_error_m: rep.mean_error_m,
                     median_error_m: rep.median_error_m,
                     p90_error_m: rep.p90_error_m,
+                    knn_mean_error_m: knn.mean_error_m,
                     termination: result.termination,
                     reused,
                     walk: result.walk.clone(),
@@ -432,6 +441,7 @@ fn summarise(config: &ExperimentConfig, runs: &[RunRecord]) -> Vec<SummaryRow> {
                 error_sd_m: sample_sd(&e),
                 median_error_mean_m: col(|r| r.median_error_m),
                 p90_error_mean_m: col(|r| r.p90_error_m),
+                knn_error_mean_m: col(|r| r.knn_mean_error_m),
                 time_limited: rs
                     .iter()
                     .filter(|r| r.termination == Termination::TimeLimit)
@@ -479,8 +489,15 @@ fn baselines(
     let mut out = Vec::new();
     for (name, points) in [("pilot-only", Vec::new()), ("dense-survey", dense)] {
         let mut reps = Vec::new();
+        let mut knn = Vec::new();
         for run in 0..config.runs {
-            reps.push(evaluator.evaluate(&points, eval_seed(config.seed, run))?);
+            let es = eval_seed(config.seed, run);
+            reps.push(evaluator.evaluate(&points, es)?);
+            knn.push(
+                evaluator
+                    .evaluate_with(&points, es, Localizer::Knn { k: 3 })?
+                    .mean_error_m,
+            );
         }
         let col = |f: fn(&LocalizationReport) -> f64| mean(&reps.iter().map(f).collect::<Vec<_>>());
         out.push(Baseline {
@@ -489,6 +506,7 @@ fn baselines(
             mean_error_m: col(|r| r.mean_error_m),
             median_error_m: col(|r| r.median_error_m),
             p90_error_m: col(|r| r.p90_error_m),
+            knn_mean_error_m: mean(&knn),
         });
     }
     Ok(out)
@@ -525,13 +543,14 @@ pub const FILES: [&str; 9] = [
 ];
 
 /// Header of `runs.csv`.
-pub const RUNS_HEADER: &str = "algorithm,budget_m,run,plan_seed,eval_seed,length_m,samples,utility_nats,mean_error_m,median_error_m,p90_error_m,termination,reused,walk,elapsed_ms";
+pub const RUNS_HEADER: &str = "algorithm,budget_m,run,plan_seed,eval_seed,length_m,samples,utility_nats,mean_error_m,median_error_m,p90_error_m,termination,reused,walk,knn_mean_error_m,elapsed_ms";
 /// Header of `summary.csv`.
-pub const SUMMARY_HEADER: &str = "algorithm,budget_m,runs,utility_mean,utility_sd,utility_min,utility_max,length_mean_m,error_mean_m,error_sd_m,median_error_mean_m,p90_error_mean_m,time_limited,elapsed_mean_ms,elapsed_max_ms";
+pub const SUMMARY_HEADER: &str = "algorithm,budget_m,runs,utility_mean,utility_sd,utility_min,utility_max,length_mean_m,error_mean_m,error_sd_m,median_error_mean_m,p90_error_mean_m,knn_error_mean_m,time_limited,elapsed_mean_ms,elapsed_max_ms";
 /// Header of `correlation.csv`.
 pub const CORRELATION_HEADER: &str = "scope,n,pearson_r";
 /// Header of `baselines.csv`.
-pub const BASELINES_HEADER: &str = "name,samples,mean_error_m,median_error_m,p90_error_m";
+pub const BASELINES_HEADER: &str =
+    "name,samples,mean_error_m,median_error_m,p90_error_m,knn_mean_error_m";
 
 impl Experiment {
     /// One row per run ([`RUNS_HEADER`]); the walk's ids are separated by spaces.
@@ -540,7 +559,7 @@ impl Experiment {
         for r in &self.runs {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{:.3},{},{:.6},{:.4},{:.4},{:.4},{},{},{},{}",
+                "{},{},{},{},{},{:.3},{},{:.6},{:.4},{:.4},{:.4},{},{},{},{:.4},{}",
                 r.algorithm,
                 r.budget_m,
                 r.run,
@@ -555,6 +574,7 @@ impl Experiment {
                 termination_name(r.termination),
                 r.reused,
                 csv_field(&r.walk.join(" ")),
+                r.knn_mean_error_m,
                 r.elapsed_ms
             );
         }
@@ -567,7 +587,7 @@ impl Experiment {
         for r in &self.summary {
             let _ = writeln!(
                 s,
-                "{},{},{},{:.6},{:.6},{:.6},{:.6},{:.3},{:.4},{:.4},{:.4},{:.4},{},{:.1},{}",
+                "{},{},{},{:.6},{:.6},{:.6},{:.6},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.1},{}",
                 r.algorithm,
                 r.budget_m,
                 r.runs,
@@ -580,6 +600,7 @@ impl Experiment {
                 r.error_sd_m,
                 r.median_error_mean_m,
                 r.p90_error_mean_m,
+                r.knn_error_mean_m,
                 r.time_limited,
                 r.elapsed_mean_ms,
                 r.elapsed_max_ms
@@ -603,8 +624,13 @@ impl Experiment {
         for b in &self.baselines {
             let _ = writeln!(
                 s,
-                "{},{},{:.4},{:.4},{:.4}",
-                b.name, b.samples, b.mean_error_m, b.median_error_m, b.p90_error_m
+                "{},{},{:.4},{:.4},{:.4},{:.4}",
+                b.name,
+                b.samples,
+                b.mean_error_m,
+                b.median_error_m,
+                b.p90_error_m,
+                b.knn_mean_error_m
             );
         }
         s

@@ -38,6 +38,7 @@
 //! ```
 
 pub mod log;
+pub mod posterior;
 pub mod replan;
 pub mod sim;
 mod store_log;
@@ -50,16 +51,15 @@ mod tests;
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use log::{LogEntry, LogEvent, MemoryLog, PlanData, SessionLog, SessionRow};
+pub use posterior::IncrementalPosterior;
 pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
 pub use tracker::Tracker;
 pub use types::*;
 
 use crate::building::Building;
-use crate::gp::predict::GpModel;
 use crate::gp::{Kernel, Point};
 use crate::samples::sample_walk;
 use crate::store::PlanRecord;
@@ -127,6 +127,12 @@ pub struct Session {
     engine: UtilityEngine,
     planned_utility: f64,
     last_replan_error: Option<String>,
+    /// Pilot data plus every sample so far, updated as scans arrive.
+    posterior: IncrementalPosterior,
+    /// Why the running posterior could not take a sample (numerically), if it could not.
+    posterior_error: Option<String>,
+    /// Metres the last replan kept back for wrong turns (0 before any replan).
+    reserve_m: f64,
 }
 
 impl std::fmt::Debug for Session {
@@ -207,6 +213,7 @@ impl Session {
         let kernel = plan.record.kernel;
         let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor.model())?;
         let planned_utility = engine.utility(&walk)?;
+        let posterior = IncrementalPosterior::new(&building, kernel)?;
         let tracker = Tracker::new(
             id,
             &building,
@@ -228,6 +235,9 @@ impl Session {
             engine,
             planned_utility,
             last_replan_error: None,
+            posterior,
+            posterior_error: None,
+            reserve_m: 0.0,
         })
     }
 
@@ -254,7 +264,15 @@ impl Session {
             LogEvent::Replan { plan_id } => {
                 let plan = self.log.load_plan(*plan_id)?;
                 let walk = b.resolve_walk(&plan.record.walk).map_err(bad)?;
-                return self.tracker.apply_replan(&b, &walk, entry.seq).map_err(bad);
+                // The reserve is what the budget left exceeded the plan's budget by (see
+                // `replan`), so replay recovers it without planning.
+                let (_, left) = self.tracker.replan_origin(&b).map_err(bad)?;
+                let reserve = (left.max(0.0) - plan.record.budget_m).max(0.0);
+                self.tracker
+                    .apply_replan(&b, &walk, entry.seq)
+                    .map_err(bad)?;
+                self.reserve_m = reserve;
+                return Ok(());
             }
             LogEvent::Step { steps, .. } => Event::Step {
                 t_ms,
@@ -290,7 +308,21 @@ impl Session {
         };
         self.tracker.check(&b, &ev).map_err(bad)?;
         self.tracker.apply(&b, &ev, entry.seq);
+        self.absorb_samples();
         Ok(())
+    }
+
+    /// Feeds the samples the tracker collected since the last call to the running
+    /// posterior. A numerical failure is kept and reported by the utility and progress.
+    fn absorb_samples(&mut self) {
+        let done = self.posterior.samples();
+        for s in &self.tracker.samples()[done.min(self.tracker.samples().len())..] {
+            let p = Point::new(s.position.x, s.position.y, s.position.floor);
+            if let Err(e) = self.posterior.add(p, s.extra_noise) {
+                self.posterior_error = Some(format!("sample of event {}: {e}", s.seq));
+                return;
+            }
+        }
     }
 
     fn finish_due_replan(&mut self) -> Option<i64> {
@@ -319,6 +351,7 @@ impl Session {
         let seq = self.log.append(self.id, event.t_ms(), &entry)?;
         let expect = self.tracker.last_seq() + 1;
         let applied = self.tracker.apply(&b, &event, seq);
+        self.absorb_samples();
         if seq != expect {
             return Err(Error::Session {
                 session: self.id,
@@ -328,7 +361,11 @@ impl Session {
                 ),
             });
         }
-        let replan_seq = self.finish_due_replan();
+        let mut replan_seq = self.finish_due_replan();
+        if replan_seq.is_none() && matches!(event, Event::CheckIn { .. }) && !applied.went_off_route
+        {
+            replan_seq = self.release_surplus_reserve();
+        }
         Ok(Ack {
             seq,
             status: self.tracker.status(),
@@ -363,21 +400,46 @@ impl Session {
             .seed
             .wrapping_add(u64::from(self.tracker.replans()) + 1);
         let to_end = replan::distances_from(&b, end);
-        let over_budget = to_end[origin] > budget + replan::BUDGET_EPS;
-        let walk = if over_budget {
-            replan::shortest_path(&b, origin, end)?
-        } else {
-            self.replanner.replan(&ReplanRequest {
-                building: &b,
-                kernel: self.kernel,
-                model,
-                prior: &prior,
-                start: origin,
-                end,
-                budget_m: budget,
-                seed,
-            })?
+        let home = to_end[origin];
+        let over_budget = home > budget + replan::BUDGET_EPS;
+        let keep = !over_budget && self.tracker.options().deviation_reserve;
+        let left_for_plan = budget;
+        let plan_within = |this: &Self, budget: f64| -> Result<Vec<usize>> {
+            if over_budget || budget <= home + 1e-6 {
+                replan::shortest_path(&b, origin, end)
+            } else {
+                this.replanner.replan(&ReplanRequest {
+                    building: &b,
+                    kernel: this.kernel,
+                    model,
+                    prior: &prior,
+                    start: origin,
+                    end,
+                    budget_m: budget,
+                    seed,
+                })
+            }
         };
+        // The reserve for the way home from here; if the walk then goes farther from the
+        // end than here, it has to come back from there: plan once more with the reserve
+        // for that way home.
+        let reserve_for = |this: &Self, h: f64| {
+            if keep {
+                this.deviation_reserve(h, &to_end)
+                    .clamp(0.0, left_for_plan - home)
+            } else {
+                0.0
+            }
+        };
+        let mut reserve = reserve_for(self, home);
+        let mut walk = plan_within(self, budget - reserve)?;
+        let farthest = walk.iter().map(|&v| to_end[v]).fold(home, f64::max);
+        let wider = reserve_for(self, farthest);
+        if wider > reserve + 1e-6 {
+            reserve = wider;
+            walk = plan_within(self, budget - reserve)?;
+        }
+        let budget = budget - reserve;
         b.check_walk(&walk)?;
         let length = b.walk_length(&walk);
         if walk.first() != Some(&origin) || walk.last() != Some(&end) {
@@ -426,6 +488,7 @@ impl Session {
         let t = self.tracker.last_t_ms().unwrap_or_else(now_ms);
         let seq = self.log.append(self.id, t, &LogEvent::Replan { plan_id })?;
         self.tracker.apply_replan(&b, &walk, seq)?;
+        self.reserve_m = (left_for_plan - budget).max(0.0);
         Ok(ReplanOutcome {
             seq,
             plan_id,
@@ -434,13 +497,128 @@ impl Session {
             length_m: length,
             budget_left_m: left,
             over_budget,
+            reserve_m: self.reserve_m,
             utility_nats: utility,
         })
     }
 
+    /// Metres to keep back, when replanning at `home` metres from the end (`to_end`: every
+    /// vertex's distance to the end), for the wrong turns still to come.
+    ///
+    /// Wrong turns in the middle of the walk cost nothing against the budget, since the
+    /// replan that follows fits the budget left; what overruns it are the wrong turns on
+    /// the way back to the end, when the budget left is just the way back. So:
+    /// * the rate is the session's own, off-route events per metre walked (over at least
+    ///   ten mean edge lengths, so that one early wrong turn does not read as a storm);
+    /// * a wrong turn from `u` onto the edge to `w` costs `len + to_end(w) - to_end(u)`
+    ///   against the way home (up to twice the edge); `cost` is its mean over the edges
+    ///   leaving junctions (vertices of degree 3 or more, where a wrong turn is possible)
+    ///   that do not lead home (those are the planned steps on the way home);
+    /// * on the `home` metres still to walk at least, `rate * home` wrong turns are
+    ///   expected, plus those on their own detours (a geometric series,
+    ///   `1 / (1 - rate * cost)`, capped at 4);
+    /// * the reserve is `cost` times that expectation plus one standard deviation of a
+    ///   Poisson count.
+    ///
+    /// With no wrong turn yet it is zero: a surveyor (or a robot) that follows the plan
+    /// never gets a shorter one.
+    fn deviation_reserve(&self, home: f64, to_end: &[f64]) -> f64 {
+        let t = &self.tracker;
+        let events = f64::from(t.off_route_events());
+        let b = &self.building;
+        if events == 0.0 || b.edges.is_empty() {
+            return 0.0;
+        }
+        let edge = b.total_edge_length() / b.edges.len() as f64;
+        let (mut sum, mut n) = (0.0, 0usize);
+        for junctions_only in [true, false] {
+            for u in 0..b.len() {
+                let nb = b.neighbours(u);
+                if (junctions_only && nb.len() < 3) || !to_end[u].is_finite() {
+                    continue;
+                }
+                for &(w, e) in nb {
+                    // A step that leads home is the planned one, not a wrong turn.
+                    if to_end[w].is_finite() && to_end[w] >= to_end[u] {
+                        sum += b.edges[e].length + to_end[w] - to_end[u];
+                        n += 1;
+                    }
+                }
+            }
+            if n > 0 {
+                break;
+            }
+        }
+        let cost = if n > 0 { sum / n as f64 } else { 2.0 * edge };
+        let rate = events / t.walked_m().max(10.0 * edge);
+        let compound = 1.0 / (1.0 - (rate * cost).min(0.75));
+        let expected = rate * home * compound;
+        cost * (expected + expected.sqrt())
+    }
+
+    /// After an on-route check-in: when the walk ahead leaves clearly more in reserve
+    /// than the wrong turns still to come need (the way home got shorter and no wrong turn
+    /// used the reserve), replans so that the walk ahead uses the surplus. Only once a
+    /// replan has kept a reserve.
+    fn release_surplus_reserve(&mut self) -> Option<i64> {
+        let t = &self.tracker;
+        if self.reserve_m <= 0.0
+            || !t.options().auto_replan
+            || !t.options().deviation_reserve
+            || t.off_route()
+            || t.status() != SessionStatus::Active
+        {
+            return None;
+        }
+        let b = self.building.clone();
+        let (origin, _) = t.replan_origin(&b).ok()?;
+        let end = t.end();
+        if origin == end {
+            return None;
+        }
+        let to_end = replan::distances_from(&b, end);
+        let farthest = t
+            .route_ahead(&b)
+            .iter()
+            .filter_map(|w| b.vertex_index(&w.vertex))
+            .map(|v| to_end[v])
+            .fold(to_end[origin], f64::max);
+        let need = self.deviation_reserve(farthest, &to_end);
+        let edge = b.total_edge_length() / b.edges.len().max(1) as f64;
+        let surplus = self.slack_m() - need;
+        if surplus <= (4.0 * edge).max(0.03 * t.budget_m()) {
+            return None;
+        }
+        match self.replan() {
+            Ok(o) => Some(o.seq),
+            Err(e) => {
+                self.last_replan_error = Some(e.to_string());
+                None
+            }
+        }
+    }
+
+    /// Metres the last replan kept back for wrong turns (0 before any replan).
+    pub fn reserve_m(&self) -> f64 {
+        self.reserve_m
+    }
+
     /// What to do next.
     pub fn guidance(&self) -> Guidance {
-        self.tracker.guidance(&self.building)
+        let mut g = self.tracker.guidance(&self.building);
+        let slack = self.slack_m();
+        if self.reserve_m > 0.0 && slack >= 0.5 && g.next_vertex.is_some() && !g.off_route {
+            g.message.push_str(&format!(
+                " Plan shortened to keep {slack:.0} m in reserve for wrong turns."
+            ));
+        }
+        g
+    }
+
+    /// Budget left beyond the walk ahead, metres (what is in reserve).
+    fn slack_m(&self) -> f64 {
+        let t = &self.tracker;
+        t.budget_m() - t.walked_m() - t.remaining_m(&self.building)
     }
 
     /// The vertices still ahead on the walk (empty when off-route or at the end).
@@ -448,19 +626,24 @@ impl Session {
         self.tracker.route_ahead(&self.building)
     }
 
-    /// Posterior standard deviation at every vertex given the pilot data and the samples.
-    fn uncertainty(&self) -> Result<Vec<VertexUncertainty>> {
-        let b = &self.building;
-        let mut train: Vec<Point> = b.pilot_points();
-        let mut noise = vec![self.kernel.sn2; train.len()];
-        for o in self.tracker.observations() {
-            train.push(o.pos);
-            noise.push(self.kernel.sn2 + o.extra_noise);
+    fn posterior_ok(&self) -> Result<&IncrementalPosterior> {
+        match &self.posterior_error {
+            Some(m) => Err(Error::Numerical(format!(
+                "session {}: the running posterior failed: {m}",
+                self.id
+            ))),
+            None => Ok(&self.posterior),
         }
-        let values = DMatrix::zeros(train.len(), 1);
-        let gp = GpModel::fit_with_noise(&self.kernel, &train, &noise, &values)?;
-        let var = gp.variance(&b.vertex_points());
-        Ok(b.vertices
+    }
+
+    /// Posterior standard deviation of the latent RSS at every vertex given the pilot
+    /// data and the samples, read off the running posterior in `O(|V|)` (the coverage
+    /// map).
+    pub fn uncertainty(&self) -> Result<Vec<VertexUncertainty>> {
+        let var = self.posterior_ok()?.vertex_variance();
+        Ok(self
+            .building
+            .vertices
             .iter()
             .zip(var)
             .map(|(v, var)| VertexUncertainty {
@@ -468,13 +651,20 @@ impl Session {
                 x: v.pos.x,
                 y: v.pos.y,
                 floor: v.pos.floor,
-                std_db: var.max(0.0).sqrt(),
+                std_db: var.sqrt(),
             })
             .collect())
     }
 
-    /// Utility of the samples actually recorded, with their real label noise, nats.
+    /// Utility of the samples actually recorded, with their real label noise, nats: kept
+    /// up to date as scans arrive ([`IncrementalPosterior`]), so this is `O(1)`.
     pub fn collected_utility(&self) -> Result<f64> {
+        Ok(self.posterior_ok()?.utility())
+    }
+
+    /// The same utility evaluated from scratch (one factorisation of everything; for
+    /// checks, `O((n + |V|)^3)`).
+    pub fn collected_utility_from_scratch(&self) -> Result<f64> {
         self.engine
             .utility_of_observations(&self.tracker.observations())
     }
@@ -512,6 +702,11 @@ impl Session {
             step_length_m: t.step_length_m(),
             replans: t.replans(),
             off_route_events: t.off_route_events(),
+            reserve_m: if self.reserve_m > 0.0 {
+                self.slack_m().max(0.0)
+            } else {
+                0.0
+            },
             uncertainty: self.uncertainty()?,
         })
     }

@@ -181,6 +181,7 @@ impl World {
 /// What the simulation did besides the session's own figures.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SimReport {
+    /// Events in the session's log: those the surveyor sent and the replans.
     pub events: u64,
     pub wrong_turns: u32,
     /// Metres the simulated surveyor really walked.
@@ -471,6 +472,8 @@ where
     };
     w.emit(ev)?;
     w.report.sim_time_s = (w.t - opts.t0_ms as f64) / 1000.0;
+    // Every event of the log, the replans the session wrote too.
+    w.report.events = u64::try_from(w.session.last_seq()).unwrap_or(0);
     let report = w.report;
     Ok((w.session.summary()?, report))
 }

@@ -582,3 +582,94 @@ fn resume_finishes_a_replan_that_a_kill_interrupted() {
     assert_eq!(resumed.last_seq(), live.last_seq());
     assert_eq!(resumed.digest(), live.digest());
 }
+
+/// The coverage map as the session computed it before the running posterior: a GP fitted
+/// from scratch on pilot data plus samples.
+fn uncertainty_from_scratch(s: &Session) -> Vec<f64> {
+    use crate::gp::predict::GpModel;
+    let b = s.building();
+    let k = s.kernel;
+    let mut train = b.pilot_points();
+    let mut noise = vec![k.sn2; train.len()];
+    for o in s.tracker().observations() {
+        train.push(o.pos);
+        noise.push(k.sn2 + o.extra_noise);
+    }
+    let values = nalgebra::DMatrix::zeros(train.len(), 1);
+    let gp = GpModel::fit_with_noise(&k, &train, &noise, &values).expect("fit");
+    gp.variance(&b.vertex_points())
+        .into_iter()
+        .map(|v| v.max(0.0).sqrt())
+        .collect()
+}
+
+#[test]
+fn incremental_progress_equals_a_from_scratch_computation() {
+    for (surveyor, deviate) in [(Surveyor::human(), 0.3), (Surveyor::robot(), 0.0)] {
+        let (_, mut s) = demo_session(surveyor, 80.0);
+        let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+        let opts = SimOptions {
+            deviate,
+            seed: 5,
+            ..SimOptions::default()
+        };
+        let mut checked = 0;
+        let mut worst: f64 = 0.0;
+        simulate(&mut s, &world, &opts, |sess, ev, _| {
+            if !matches!(ev, Event::Scan { .. }) || sess.samples().len() % 3 != 1 {
+                return Ok(());
+            }
+            let p = sess.progress()?;
+            let scratch = sess.collected_utility_from_scratch()?;
+            let reference = crate::utility::reference_utility(
+                &sess.kernel,
+                &sess.building().vertex_points(),
+                &crate::utility::reference::pilot_observations(&sess.building().pilot_points())
+                    .into_iter()
+                    .chain(sess.tracker().observations())
+                    .collect::<Vec<_>>(),
+            )?;
+            let rel = (p.collected_utility_nats - scratch).abs() / scratch.max(1e-300);
+            assert!(
+                rel < 1e-9,
+                "{} vs {scratch} (rel {rel:e})",
+                p.collected_utility_nats
+            );
+            let rel_ref = (p.collected_utility_nats - reference).abs() / reference;
+            assert!(
+                rel_ref < 1e-9,
+                "{} vs reference {reference}",
+                p.collected_utility_nats
+            );
+            for (u, want) in p.uncertainty.iter().zip(uncertainty_from_scratch(sess)) {
+                let err = (u.std_db - want).abs();
+                worst = worst.max(err);
+                assert!(
+                    err < 1e-7 * (1.0 + want),
+                    "vertex {}: {} vs {want}",
+                    u.vertex,
+                    u.std_db
+                );
+            }
+            checked += 1;
+            Ok(())
+        })
+        .expect("sim");
+        assert!(checked >= 5, "checked {checked}");
+        assert!(s.samples().len() > 15, "{}", s.samples().len());
+        eprintln!("{checked} checks, worst std difference {worst:e} dB");
+    }
+}
+
+#[test]
+fn a_robot_that_follows_the_plan_gets_no_reserve_and_exactly_the_planned_utility() {
+    let (_, mut s) = demo_session(Surveyor::robot(), 80.0);
+    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+    let (sum, _) = simulate(&mut s, &world, &SimOptions::default(), |_, _, _| Ok(())).expect("sim");
+    assert_eq!(sum.replans, 0);
+    assert_eq!(s.reserve_m(), 0.0);
+    assert!(!s.guidance().message.contains("reserve"));
+    let rel =
+        (sum.collected_utility_nats - sum.planned_utility_nats).abs() / sum.planned_utility_nats;
+    assert!(rel < 1e-12, "{sum:?}");
+}

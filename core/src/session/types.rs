@@ -135,6 +135,9 @@ pub struct SessionOptions {
     pub calibration_weight_steps: f64,
     /// Seed of the replanner (replan `k` uses `seed + k`).
     pub seed: u64,
+    /// Replans keep part of the budget left in reserve for wrong turns, following the
+    /// rate of wrong turns observed so far (see `Session::replan`).
+    pub deviation_reserve: bool,
 }
 
 impl Default for SessionOptions {
@@ -146,6 +149,7 @@ impl Default for SessionOptions {
             auto_replan: true,
             calibration_weight_steps: 20.0,
             seed: 1,
+            deviation_reserve: true,
         }
     }
 }
@@ -399,6 +403,9 @@ pub struct Progress {
     pub step_length_m: f64,
     pub replans: u32,
     pub off_route_events: u32,
+    /// Budget beyond the walk ahead kept in reserve for wrong turns, metres (0 until a
+    /// replan keeps one).
+    pub reserve_m: f64,
     /// Posterior standard deviation at every vertex given pilot data and collected samples.
     pub uncertainty: Vec<VertexUncertainty>,
 }
@@ -440,6 +447,9 @@ pub struct ReplanOutcome {
     pub budget_left_m: f64,
     /// The budget could not reach the end: the walk is the shortest way there.
     pub over_budget: bool,
+    /// Metres of the budget left that the new walk keeps back for wrong turns still to
+    /// come (it was planned with `budget_left_m - reserve_m`).
+    pub reserve_m: f64,
     /// Utility of the new walk given pilot data and everything collected, nats.
     pub utility_nats: f64,
 }

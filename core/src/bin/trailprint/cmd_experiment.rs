@@ -174,23 +174,24 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         exp.runs.len()
     );
     println!(
-        "{:<17} {:>8} {:>12} {:>10} {:>11}",
-        "algorithm", "budget", "utility", "error m", "time ms"
+        "{:<17} {:>8} {:>12} {:>10} {:>10} {:>11}",
+        "algorithm", "budget", "utility", "error m", "knn m", "time ms"
     );
     for r in &exp.summary {
         println!(
-            "{:<17} {:>8} {:>12.3} {:>10.3} {:>11.1}",
+            "{:<17} {:>8} {:>12.3} {:>10.3} {:>10.3} {:>11.1}",
             r.algorithm.name(),
             r.budget_m,
             r.utility_mean,
             r.error_mean_m,
+            r.knn_error_mean_m,
             r.elapsed_mean_ms
         );
     }
     for bl in &exp.baselines {
         println!(
-            "baseline {:<13} {:>5} samples, error {:.3} m",
-            bl.name, bl.samples, bl.mean_error_m
+            "baseline {:<13} {:>5} samples, error {:.3} m (knn {:.3} m)",
+            bl.name, bl.samples, bl.mean_error_m, bl.knn_mean_error_m
         );
     }
     for c in &exp.correlations {

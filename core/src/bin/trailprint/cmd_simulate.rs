@@ -59,6 +59,10 @@ pub struct Args {
     /// Never replan automatically when off-route (the surveyor walks back instead).
     #[arg(long)]
     no_auto_replan: bool,
+    /// Replan with the whole budget left, keeping nothing in reserve for further wrong
+    /// turns (the walk may then end over budget).
+    #[arg(long)]
+    no_reserve: bool,
     /// Off-route slack past a due check-in, metres (plus 25% of the leg).
     #[arg(long, default_value_t = 3.0)]
     slack: f64,
@@ -293,6 +297,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         auto_replan: !a.no_auto_replan,
         off_route_slack_m: a.slack,
         seed: a.seed,
+        deviation_reserve: !a.no_reserve,
         ..SessionOptions::default()
     };
     let log: Arc<dyn SessionLog> = store.clone();
@@ -357,6 +362,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             "planned_utility_nats": summary.planned_utility_nats,
             "collected_utility_nats": summary.collected_utility_nats,
             "replans": summary.replans,
+            "reserve_m": session.reserve_m(),
             "off_route_events": summary.off_route_events,
             "wrong_turns": report.wrong_turns,
             "mean_std_db": summary.mean_std_db,

@@ -25,6 +25,7 @@ mod cmd_import_floorplan;
 mod cmd_pilot;
 mod cmd_plan;
 mod cmd_render;
+mod cmd_sessions;
 mod cmd_simulate;
 mod cmd_team_plan;
 mod cmd_utility;
@@ -58,7 +59,7 @@ enum Command {
     Utility(cmd_utility::Args),
     /// Generate a synthetic building (graph, access points, pilot, test and dense survey).
     Generate(cmd_generate::Args),
-    /// Localization error of a walk's fingerprint map (SPEC section 5).
+    /// Localization error of a walk's (or a session's) fingerprint map (SPEC section 5).
     Evaluate(cmd_evaluate::Args),
     /// The paper's evaluation: algorithms x budgets x runs, CSV and SVG charts.
     Experiment(cmd_experiment::Args),
@@ -86,6 +87,9 @@ enum Command {
     Bench(cmd_bench::Args),
     /// Plan a walk, then walk it as a survey session with a simulated surveyor.
     Simulate(cmd_simulate::Args),
+    /// List the survey sessions in the database (building, surveyor, status, walked,
+    /// samples, utility).
+    Sessions(cmd_sessions::Args),
 }
 
 /// Ends quietly when the reader of standard output goes away (`trailprint ... | head`), as
@@ -125,6 +129,7 @@ fn main() -> ExitCode {
         Command::Plan(a) => cmd_plan::run(a, db),
         Command::Bench(a) => cmd_bench::run(a),
         Command::Simulate(a) => cmd_simulate::run(a, db),
+        Command::Sessions(a) => cmd_sessions::run(&a, db),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,112 @@
+//! Cost per scan event of a session's progress figures at 300, 3,000 and 10,000 samples:
+//! the running posterior (`session::IncrementalPosterior`, what `Session::progress` reads)
+//! against the from-scratch evaluation that `progress()` used to run on every call.
+//!
+//! Samples are a robot's, every 0.5 m along a seeded random walk on a generated 132-vertex
+//! office floor (the building of issue 16), with the demo kernel. For each size it times
+//! 20 scans (add one sample, then read the utility and the coverage map, as the progress
+//! screen does) and one from-scratch evaluation of the same samples (dense path of the
+//! utility engine). It also reports the time to build the posterior up to that size
+//! sample by sample (what resuming such a session costs) and the memory the factors hold.
+//!
+//! Run: `cargo run --release -p trailprint-core --example session_progress`
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use trailprint::Building;
+use trailprint::gp::{Kernel, Point};
+use trailprint::samples::SurveyorModel;
+use trailprint::session::IncrementalPosterior;
+use trailprint::synth::{SynthParams, generate};
+use trailprint::utility::{Observation, UtilityEngine};
+
+fn main() -> trailprint::Result<()> {
+    let params = SynthParams {
+        name: "Office floor".into(),
+        rooms_per_side: 7,
+        corridor_length_m: 66.0,
+        seed: 1,
+        ..SynthParams::default()
+    };
+    let b: Arc<Building> = Arc::new(Building::from_file(generate(&params)?.file, "generated")?);
+    let kernel = Kernel::new(62.6, 7.9, 4.2);
+    println!(
+        "building {:?}: {} vertices, {} pilot; kernel sf2={} ell={} sn2={}",
+        b.name,
+        b.len(),
+        b.pilot.len(),
+        kernel.sf2,
+        kernel.ell,
+        kernel.sn2
+    );
+    // A seeded random walk on the graph, sampled every 0.5 m.
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut points: Vec<Point> = Vec::new();
+    let (mut at, mut carry) = (0usize, 0.0f64);
+    while points.len() < 10_020 {
+        let nb = b.neighbours(at);
+        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
+        let len = b.edges[e].length;
+        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
+        let mut s = carry;
+        while s < len {
+            let t = s / len;
+            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
+            points.push(Point::new(
+                pa.x + t * (pb.x - pa.x),
+                pa.y + t * (pb.y - pa.y),
+                floor,
+            ));
+            s += 0.5;
+        }
+        carry = s - len;
+        at = next;
+    }
+    let engine = UtilityEngine::new(b.clone(), kernel, SurveyorModel::Robot { interval: 0.5 })?;
+    let mut post = IncrementalPosterior::new(&b, kernel)?;
+    let built = Instant::now();
+    println!(
+        "\n| samples | per scan: add + utility + coverage map | from scratch (one evaluation) | build to this size | factors held |"
+    );
+    println!("|---:|---:|---:|---:|---:|");
+    for &n in &[300usize, 3_000, 10_000] {
+        while post.samples() < n {
+            post.add(points[post.samples()], 0.0)?;
+        }
+        let build_s = built.elapsed().as_secs_f64();
+        let reps = 20;
+        let t = Instant::now();
+        let mut sink = 0.0;
+        for _ in 0..reps {
+            post.add(points[post.samples()], 0.0)?;
+            sink += post.utility();
+            sink += post.vertex_variance().iter().sum::<f64>();
+        }
+        let per_scan_ms = t.elapsed().as_secs_f64() * 1000.0 / reps as f64;
+        let obs: Vec<Observation> = points[..post.samples()]
+            .iter()
+            .map(|&pos| Observation {
+                pos,
+                extra_noise: 0.0,
+            })
+            .collect();
+        let t = Instant::now();
+        let scratch = engine.utility_of_observations(&obs)?;
+        let scratch_ms = t.elapsed().as_secs_f64() * 1000.0;
+        let rel = (scratch - post.utility()).abs() / scratch;
+        assert!(
+            rel < 1e-9,
+            "incremental {} vs from scratch {scratch}",
+            post.utility()
+        );
+        println!(
+            "| {n} | {per_scan_ms:.3} ms | {scratch_ms:.1} ms | {build_s:.1} s | {:.0} MB |",
+            post.memory_bytes() as f64 / 1e6
+        );
+        std::hint::black_box(sink);
+    }
+    Ok(())
+}
