@@ -95,10 +95,16 @@ fn main() -> trailprint::Result<()> {
                 })
                 .collect();
             let t0 = Instant::now();
-            let s: Vec<f64> = walks.iter().map(|w| sur.value(w)).collect::<Result<_, _>>()?;
+            let s: Vec<f64> = walks
+                .iter()
+                .map(|w| sur.value(w))
+                .collect::<Result<_, _>>()?;
             let ts = t0.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
             let t1 = Instant::now();
-            let e: Vec<f64> = walks.iter().map(|w| p.utility(w)).collect::<Result<_, _>>()?;
+            let e: Vec<f64> = walks
+                .iter()
+                .map(|w| p.utility(w))
+                .collect::<Result<_, _>>()?;
             let te = t1.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
             let rho = pearson(&ranks(&s), &ranks(&e));
             let (mut conc, mut pairs, mut conc2, mut pairs2) = (0usize, 0usize, 0usize, 0usize);

@@ -191,7 +191,10 @@ pub enum OutlineKind {
 impl OutlineKind {
     /// Whether the kind is a walkable space (room, corridor, area).
     pub fn is_walkable(self) -> bool {
-        matches!(self, OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area)
+        matches!(
+            self,
+            OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area
+        )
     }
 
     /// The name used in the file.
@@ -883,7 +886,10 @@ fn validate_outline(
         if o.points.len() < 2 {
             return Err((
                 format!("outlines[{i}].points"),
-                format!("{what} is a line and needs at least 2 points, got {}", o.points.len()),
+                format!(
+                    "{what} is a line and needs at least 2 points, got {}",
+                    o.points.len()
+                ),
             ));
         }
         return Ok(());

@@ -208,7 +208,9 @@ fn trailing_data_after_the_document_is_refused() {
             .expect_err(what)
             .to_string();
         assert!(
-            e.starts_with("t.json: $: unexpected data after the JSON document (trailing characters at line"),
+            e.starts_with(
+                "t.json: $: unexpected data after the JSON document (trailing characters at line"
+            ),
             "{what}: {e}"
         );
     }
@@ -219,12 +221,32 @@ fn trailing_data_after_the_document_is_refused() {
 #[test]
 fn positional_arrays_are_refused_naming_the_path() {
     let cases: Vec<(&str, serde_json::Value, &str)> = vec![
-        ("vertices", serde_json::json!([["a", 0.0, 0.0, 0], {"id": "b", "x": 3.0, "y": 4.0}, {"id": "c", "x": 3.0, "y": 0.0}]), "vertices[0]"),
-        ("edges", serde_json::json!([{"a": "a", "b": "b"}, ["b", "c", 4.5]]), "edges[1]"),
+        (
+            "vertices",
+            serde_json::json!([["a", 0.0, 0.0, 0], {"id": "b", "x": 3.0, "y": 4.0}, {"id": "c", "x": 3.0, "y": 0.0}]),
+            "vertices[0]",
+        ),
+        (
+            "edges",
+            serde_json::json!([{"a": "a", "b": "b"}, ["b", "c", 4.5]]),
+            "edges[1]",
+        ),
         ("floors", serde_json::json!([[0, "Ground"]]), "floors[0]"),
-        ("pilot", serde_json::json!([[0.0, 1.0, 0, {"ap": -60.0}]]), "pilot[0]"),
-        ("test_points", serde_json::json!([[0.0, 1.0]]), "test_points[0]"),
-        ("dense_survey", serde_json::json!([{"x": 0.0, "y": 1.0}, [0.0, 2.0]]), "dense_survey[1]"),
+        (
+            "pilot",
+            serde_json::json!([[0.0, 1.0, 0, {"ap": -60.0}]]),
+            "pilot[0]",
+        ),
+        (
+            "test_points",
+            serde_json::json!([[0.0, 1.0]]),
+            "test_points[0]",
+        ),
+        (
+            "dense_survey",
+            serde_json::json!([{"x": 0.0, "y": 1.0}, [0.0, 2.0]]),
+            "dense_survey[1]",
+        ),
         ("kernel", serde_json::json!([40.0, 6.0, 9.0]), "kernel"),
     ];
     for (field, value, path) in cases {
@@ -232,7 +254,9 @@ fn positional_arrays_are_refused_naming_the_path() {
         v[field] = value;
         let e = err_of(v);
         assert!(
-            e.starts_with(&format!("t.json: {path}: invalid type: sequence, expected a JSON object")),
+            e.starts_with(&format!(
+                "t.json: {path}: invalid type: sequence, expected a JSON object"
+            )),
             "{field}: {e}"
         );
     }
@@ -240,7 +264,10 @@ fn positional_arrays_are_refused_naming_the_path() {
     let e = Building::from_json(r#"["survey-building/1", "T", [], []]"#, "t.json")
         .expect_err("array document")
         .to_string();
-    assert!(e.starts_with("t.json: $: invalid type: sequence, expected a JSON object"), "{e}");
+    assert!(
+        e.starts_with("t.json: $: invalid type: sequence, expected a JSON object"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -289,10 +316,7 @@ fn coordinates_and_lengths_are_bounded() {
     let b = Building::from_json(&v.to_string(), "t.json").expect("on the bound");
     assert!(b.total_edge_length().is_finite());
 
-    for (path, value) in [
-        ("vertices[1].x", 1e308),
-        ("vertices[1].y", -1.000001e6),
-    ] {
+    for (path, value) in [("vertices[1].x", 1e308), ("vertices[1].y", -1.000001e6)] {
         let mut v = base();
         let axis = &path[path.len() - 1..];
         v["vertices"][1][axis] = serde_json::json!(value);
@@ -308,7 +332,9 @@ fn coordinates_and_lengths_are_bounded() {
     v["test_points"] = serde_json::json!([{"x": 0.0, "y": 2e6}]);
     let e = err_of(v);
     assert!(
-        e.contains("t.json: test_points[0].y: must be a finite number of metres with |y| <= 1e6, got 2e6"),
+        e.contains(
+            "t.json: test_points[0].y: must be a finite number of metres with |y| <= 1e6, got 2e6"
+        ),
         "{e}"
     );
     // An explicit length may exceed the straight line, but not without bound.
@@ -316,7 +342,9 @@ fn coordinates_and_lengths_are_bounded() {
     v["edges"][1]["length"] = serde_json::json!(1e300);
     let e = err_of(v);
     assert!(
-        e.contains("t.json: edges[1].length: edge \"b\"-\"c\": length 1e300 m is longer than 1e7 m"),
+        e.contains(
+            "t.json: edges[1].length: edge \"b\"-\"c\": length 1e300 m is longer than 1e7 m"
+        ),
         "{e}"
     );
 }
@@ -328,7 +356,11 @@ fn rss_is_between_minus_120_and_0_dbm() {
         v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": ok}}]);
         Building::from_json(&v.to_string(), "t.json").expect("in range");
     }
-    for (field, bad) in [("pilot", 25.0), ("test_points", -120.5), ("dense_survey", 0.01)] {
+    for (field, bad) in [
+        ("pilot", 25.0),
+        ("test_points", -120.5),
+        ("dense_survey", 0.01),
+    ] {
         let mut v = base();
         v[field] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap-7": bad}}]);
         let e = err_of(v);

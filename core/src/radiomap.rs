@@ -93,7 +93,11 @@ pub struct ScanRow {
 pub type SessionPeople = HashMap<i64, (Option<String>, Option<String>)>;
 
 /// The rows of a building: its pilot data, then the fingerprints collected in sessions.
-pub fn scan_rows(building: &Building, collected: &[StoredCollected], people: &SessionPeople) -> Vec<ScanRow> {
+pub fn scan_rows(
+    building: &Building,
+    collected: &[StoredCollected],
+    people: &SessionPeople,
+) -> Vec<ScanRow> {
     let frame = building.geo.map(LocalFrame::new);
     let lonlat = |x: f64, y: f64| frame.map(|f| f.to_wgs84(x, y));
     let mut out = Vec::with_capacity(building.pilot.len() + collected.len());
@@ -154,7 +158,10 @@ fn opt<T: std::fmt::Debug>(v: Option<T>) -> String {
 /// The UJIIndoorLoc CSV of the rows and its `WAP,name` table (module docs). Numbers are
 /// written in the shortest form that reads back to the same value.
 pub fn uji_csv(rows: &[ScanRow]) -> (String, String) {
-    let aps: BTreeSet<&str> = rows.iter().flat_map(|r| r.rss.keys().map(String::as_str)).collect();
+    let aps: BTreeSet<&str> = rows
+        .iter()
+        .flat_map(|r| r.rss.keys().map(String::as_str))
+        .collect();
     let aps: Vec<&str> = aps.into_iter().collect();
     let wap = |i: usize| format!("WAP{:03}", i + 1);
     let mut ids: HashMap<&str, usize> = HashMap::new();
@@ -189,8 +196,22 @@ pub fn uji_csv(rows: &[ScanRow]) -> (String, String) {
         f.push("0".into());
         f.push("0".into());
         f.push("0".into());
-        f.push(r.surveyor.as_deref().and_then(|s| ids.get(s)).copied().unwrap_or(0).to_string());
-        f.push(r.device.as_deref().and_then(|d| devices.get(d)).copied().unwrap_or(0).to_string());
+        f.push(
+            r.surveyor
+                .as_deref()
+                .and_then(|s| ids.get(s))
+                .copied()
+                .unwrap_or(0)
+                .to_string(),
+        );
+        f.push(
+            r.device
+                .as_deref()
+                .and_then(|d| devices.get(d))
+                .copied()
+                .unwrap_or(0)
+                .to_string(),
+        );
         f.push(r.time_ms.map_or(0, |t| t.div_euclid(1000)).to_string());
         f.push(opt(r.lon));
         f.push(opt(r.lat));
@@ -249,7 +270,10 @@ pub fn read_uji_csv(text: &str, map: Option<&str>, origin: &str) -> Result<Vec<S
             }
             let f = split_csv(line);
             if f.len() != 2 {
-                return Err(bad(i + 1, format!("the WAP table needs 2 fields, got {}", f.len())));
+                return Err(bad(
+                    i + 1,
+                    format!("the WAP table needs 2 fields, got {}", f.len()),
+                ));
             }
             names.insert(f[0].clone(), f[1].clone());
         }
@@ -275,7 +299,10 @@ pub fn read_uji_csv(text: &str, map: Option<&str>, origin: &str) -> Result<Vec<S
         }
         let f = split_csv(line);
         if f.len() != header.len() {
-            return Err(bad(i + 1, format!("{} fields, the header has {}", f.len(), header.len())));
+            return Err(bad(
+                i + 1,
+                format!("{} fields, the header has {}", f.len(), header.len()),
+            ));
         }
         let num = |c: usize| -> Result<f64> {
             f[c].trim()
@@ -304,7 +331,9 @@ pub fn read_uji_csv(text: &str, map: Option<&str>, origin: &str) -> Result<Vec<S
             floor: floor as i64,
             lon: text_of("LON_DEG").and_then(|s| s.parse().ok()),
             lat: text_of("LAT_DEG").and_then(|s| s.parse().ok()),
-            sigma_m: text_of("SIGMA_M").and_then(|s| s.parse().ok()).unwrap_or(0.0),
+            sigma_m: text_of("SIGMA_M")
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(0.0),
             rss,
         });
     }
@@ -368,7 +397,12 @@ pub fn walkable_grid(building: &Building, step: f64) -> Result<Vec<Point>> {
             .filter(|o| o.floor == floor.id && o.kind.is_walkable())
             .map(|o| {
                 Polygon::new(
-                    LineString::from(o.points.iter().map(|p| Coord { x: p[0], y: p[1] }).collect::<Vec<_>>()),
+                    LineString::from(
+                        o.points
+                            .iter()
+                            .map(|p| Coord { x: p[0], y: p[1] })
+                            .collect::<Vec<_>>(),
+                    ),
                     vec![],
                 )
             })
@@ -377,7 +411,12 @@ pub fn walkable_grid(building: &Building, step: f64) -> Result<Vec<Point>> {
             out.extend(fallback.iter().filter(|p| p.floor == floor.id));
             continue;
         }
-        let (mut x0, mut y0, mut x1, mut y1) = (f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let (mut x0, mut y0, mut x1, mut y1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
         for p in polys.iter().flat_map(|p| p.exterior().coords()) {
             x0 = x0.min(p.x);
             y0 = y0.min(p.y);
@@ -412,7 +451,8 @@ pub fn radio_map(rows: &[ScanRow], kernel: &Kernel, grid: Vec<Point>) -> Result<
     kernel.validate("radio map kernel")?;
     if rows.is_empty() {
         return Err(Error::InvalidRequest(
-            "no fingerprints to build a radio map from (no pilot data and no survey session)".into(),
+            "no fingerprints to build a radio map from (no pilot data and no survey session)"
+                .into(),
         ));
     }
     let aps: Vec<String> = rows
@@ -431,7 +471,11 @@ pub fn radio_map(rows: &[ScanRow], kernel: &Kernel, grid: Vec<Point>) -> Result<
     });
     let gp = GpModel::fit_with_noise(kernel, &train, &noise, &values)?;
     let p = gp.predict(&grid);
-    let sd = p.variance.iter().map(|v| (v.max(0.0) + kernel.sn2).sqrt()).collect();
+    let sd = p
+        .variance
+        .iter()
+        .map(|v| (v.max(0.0) + kernel.sn2).sqrt())
+        .collect();
     Ok(RadioMap {
         aps,
         kernel: *kernel,
@@ -490,7 +534,12 @@ pub fn radio_map_geojson(map: &RadioMap, geo: Option<GeoOrigin>, building: &str)
                 .aps
                 .iter()
                 .enumerate()
-                .map(|(a, ap)| (ap.clone(), serde_json::json!((map.mean[(i, a)] * 100.0).round() / 100.0)))
+                .map(|(a, ap)| {
+                    (
+                        ap.clone(),
+                        serde_json::json!((map.mean[(i, a)] * 100.0).round() / 100.0),
+                    )
+                })
                 .collect();
             serde_json::json!({
                 "type": "Feature",

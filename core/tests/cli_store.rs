@@ -67,7 +67,11 @@ fn delete_needs_force_when_survey_data_would_go_and_says_how_much() {
     );
     assert!(stderr.starts_with(&expected), "{stderr}");
     assert!(stderr.contains("--force"), "{stderr}");
-    assert_eq!(dump_file(&db), before, "a refused delete changed the database");
+    assert_eq!(
+        dump_file(&db),
+        before,
+        "a refused delete changed the database"
+    );
 
     let msg = run_ok(&db, &["delete", &name, "--force"]);
     assert!(
@@ -75,7 +79,10 @@ fn delete_needs_force_when_survey_data_would_go_and_says_how_much() {
         "{msg}"
     );
     assert!(
-        msg.contains(&format!("1 session and {} collected fingerprints", info.collected)),
+        msg.contains(&format!(
+            "1 session and {} collected fingerprints",
+            info.collected
+        )),
         "{msg}"
     );
     assert!(run_ok(&db, &["buildings"]).starts_with("no buildings"));
@@ -103,7 +110,9 @@ fn building_names_are_printed_escaped() {
     run_ok(&db, &["import", file.to_str().expect("utf-8")]);
     let list = run_ok(&db, &["buildings"]);
     assert!(
-        !list.chars().any(|c| c.is_control() && c != '\n' || c == '\u{202e}'),
+        !list
+            .chars()
+            .any(|c| c.is_control() && c != '\n' || c == '\u{202e}'),
         "raw control characters printed: {list:?}"
     );
     assert!(
@@ -230,7 +239,11 @@ fn output_is_never_written_through_a_planted_temporary_name() {
         serde_json::from_str(&std::fs::read_to_string(&target).expect("target")).expect("json");
     assert_eq!(v["name"], "Area One (synthetic)");
     // The replaced file keeps its permissions, and no temporary file is left.
-    let mode = std::fs::metadata(&target).expect("meta").permissions().mode() & 0o777;
+    let mode = std::fs::metadata(&target)
+        .expect("meta")
+        .permissions()
+        .mode()
+        & 0o777;
     assert_eq!(mode, 0o640);
     let tmps = std::fs::read_dir(dir.path())
         .expect("dir")

@@ -72,7 +72,10 @@ fn pos(b: &Building, v: usize) -> Coord<f64> {
 }
 
 fn is_portal(b: &Building, v: usize) -> bool {
-    matches!(b.vertices[v].label.as_deref(), Some("door") | Some("opening"))
+    matches!(
+        b.vertices[v].label.as_deref(),
+        Some("door") | Some("opening")
+    )
 }
 
 /// The walkable-space properties every imported map must have.
@@ -84,7 +87,11 @@ fn check_walkable(b: &Building) {
             .iter()
             .map(|poly| Euclidean.distance(&p, poly))
             .fold(f64::INFINITY, f64::min);
-        assert!(d <= 0.01, "vertex {} is {d} m outside walkable space", vx.id);
+        assert!(
+            d <= 0.01,
+            "vertex {} is {d} m outside walkable space",
+            vx.id
+        );
     }
     for e in &b.edges {
         let (fa, fb) = (b.vertices[e.a].pos.floor, b.vertices[e.b].pos.floor);
@@ -102,9 +109,9 @@ fn check_walkable(b: &Building) {
             let inside = polys
                 .iter()
                 .any(|poly| Euclidean.distance(&Point(q), poly) <= 1e-6);
-            let near_portal = [e.a, e.b]
-                .iter()
-                .any(|&v| is_portal(b, v) && Euclidean.distance(&Point(q), &Point(pos(b, v))) <= 0.1);
+            let near_portal = [e.a, e.b].iter().any(|&v| {
+                is_portal(b, v) && Euclidean.distance(&Point(q), &Point(pos(b, v))) <= 0.1
+            });
             assert!(
                 inside || near_portal,
                 "edge {}-{} leaves walkable space at ({:.2}, {:.2})",
@@ -147,7 +154,12 @@ fn vertex_at(b: &Building, floor: i64, c: Coord<f64>, label: &str) -> usize {
                 && b.vertices[v].label.as_deref() == Some(label)
                 && Euclidean.distance(&Point(pos(b, v)), &Point(c)) <= tol
         })
-        .unwrap_or_else(|| panic!("no {label} vertex at ({:.2}, {:.2}) on floor {floor}", c.x, c.y))
+        .unwrap_or_else(|| {
+            panic!(
+                "no {label} vertex at ({:.2}, {:.2}) on floor {floor}",
+                c.x, c.y
+            )
+        })
 }
 
 /// Whether `v` has a neighbour labelled `label`.
@@ -176,7 +188,10 @@ fn office_on_two_levels_is_walkable_and_joined() {
     let (r, b) = import("office-l.geojson");
     assert_eq!(r.format, Format::OsmIndoor);
     assert_eq!(b.name, "Rue des Bureaux 12");
-    assert_eq!(b.floors.iter().map(|f| f.id).collect::<Vec<_>>(), vec![0, 1]);
+    assert_eq!(
+        b.floors.iter().map(|f| f.id).collect::<Vec<_>>(),
+        vec![0, 1]
+    );
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     assert!(r.dropped.is_empty(), "{:?}", r.dropped);
     check_walkable(&b);
@@ -193,14 +208,21 @@ fn office_on_two_levels_is_walkable_and_joined() {
         let corridor = format!("Corridor {floor}");
         let d = vertex_at(&b, floor, at(&b, x, y), "door");
         assert!(joined_to(&b, d, room), "door of {room} not joined to it");
-        assert!(joined_to(&b, d, &corridor), "door of {room} not joined to the corridor");
+        assert!(
+            joined_to(&b, d, &corridor),
+            "door of {room} not joined to the corridor"
+        );
     }
     // Office 104 has no door: it is joined in the middle of the 6 m it shares with the corridor.
     let j = vertex_at(&b, 0, at(&b, 23.0, 2.4), "opening");
     assert!(joined_to(&b, j, "Office 104") && joined_to(&b, j, "Corridor 0"));
     // Every office has vertices inside (a grid, not only a door).
     for room in ["Office 101", "Office 102", "Office 106", "Office 201"] {
-        let n = b.vertices.iter().filter(|v| v.label.as_deref() == Some(room)).count();
+        let n = b
+            .vertices
+            .iter()
+            .filter(|v| v.label.as_deref() == Some(room))
+            .count();
         assert!(n >= 4, "{room}: {n} vertices");
     }
     // The 2.4 m arm of the corridor gets one row of grid vertices along it (where the
@@ -215,7 +237,10 @@ fn office_on_two_levels_is_walkable_and_joined() {
     assert!(ys.len() >= 13, "{ys:?}");
     ys.sort_by(f64::total_cmp);
     assert!(ys[ys.len() - 1] - ys[0] < 1e-3, "one row: {ys:?}");
-    assert!(ys[0] - lo >= 0.3 && hi - ys[0] >= 0.3, "{ys:?} in [{lo}, {hi}]");
+    assert!(
+        ys[0] - lo >= 0.3 && hi - ys[0] >= 0.3,
+        "{ys:?} in [{lo}, {hi}]"
+    );
 
     // Floors: the stairwell (8 m per storey) and the elevator (15 m + 3 m per storey).
     let mut v = vertical_lengths(&b);
@@ -234,7 +259,10 @@ fn mall_imdf_folder_and_zip() {
     assert_eq!(r.format, Format::Imdf);
     assert_eq!(b.name, "Galerie Test");
     assert_eq!(
-        b.floors.iter().map(|f| (f.id, f.name.clone().unwrap())).collect::<Vec<_>>(),
+        b.floors
+            .iter()
+            .map(|f| (f.id, f.name.clone().unwrap()))
+            .collect::<Vec<_>>(),
         vec![(0, "0".to_string()), (1, "1".to_string())]
     );
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
@@ -249,9 +277,16 @@ fn mall_imdf_folder_and_zip() {
         ]),
         vec![],
     );
-    for e in b.edges.iter().filter(|e| b.vertices[e.a].pos.floor == 0 && b.vertices[e.b].pos.floor == 0) {
+    for e in b
+        .edges
+        .iter()
+        .filter(|e| b.vertices[e.a].pos.floor == 0 && b.vertices[e.b].pos.floor == 0)
+    {
         let line = geo::Line::new(pos(&b, e.a), pos(&b, e.b));
-        assert!(!geo::Intersects::intersects(&line, &pillar), "edge through the pillar");
+        assert!(
+            !geo::Intersects::intersects(&line, &pillar),
+            "edge through the pillar"
+        );
     }
     // Shops: through their opening; the kiosk, which has none, through its shared boundary.
     let d = vertex_at(&b, 0, at(&b, 5.0, 12.0), "door");
@@ -260,16 +295,27 @@ fn mall_imdf_folder_and_zip() {
     assert!(joined_to(&b, j, "Kiosk") && joined_to(&b, j, "Hall"));
     // The structure unit is left out.
     let structure = Polygon::new(
-        LineString::from(vec![at(&b, 28.2, 0.2), at(&b, 30.8, 0.2), at(&b, 30.8, 2.8), at(&b, 28.2, 2.8)]),
+        LineString::from(vec![
+            at(&b, 28.2, 0.2),
+            at(&b, 30.8, 0.2),
+            at(&b, 30.8, 2.8),
+            at(&b, 28.2, 2.8),
+        ]),
         vec![],
     );
-    assert!(!b.vertices.iter().any(|v| v.pos.floor == 0
-        && structure.contains(&Point::new(v.pos.x, v.pos.y))));
+    assert!(
+        !b.vertices
+            .iter()
+            .any(|v| v.pos.floor == 0 && structure.contains(&Point::new(v.pos.x, v.pos.y)))
+    );
     let mut v = vertical_lengths(&b);
     v.sort_by(|a, c| a.2.total_cmp(&c.2));
     assert_eq!(
         v.iter().map(|x| (x.0.as_str(), x.2)).collect::<Vec<_>>(),
-        vec![("stairs", STAIRS_M_PER_LEVEL), ("elevator", ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL)]
+        vec![
+            ("stairs", STAIRS_M_PER_LEVEL),
+            ("elevator", ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL)
+        ]
     );
 
     // The same data set zipped (as IMDF archives are delivered) gives the same building.
@@ -286,8 +332,11 @@ fn mall_imdf_folder_and_zip() {
             .collect();
         names.sort();
         for p in names {
-            z.start_file(format!("mall/{}", p.file_name().unwrap().to_string_lossy()), opts)
-                .unwrap();
+            z.start_file(
+                format!("mall/{}", p.file_name().unwrap().to_string_lossy()),
+                opts,
+            )
+            .unwrap();
             std::io::Write::write_all(&mut z, &std::fs::read(&p).unwrap()).unwrap();
         }
         z.finish().unwrap();
@@ -315,21 +364,38 @@ fn messy_export_gives_counted_warnings_and_a_building() {
     assert_eq!(r.warnings.iter().map(|w| w.count).sum::<usize>(), 8);
     // The island room cannot be reached: dropped, and said.
     assert_eq!(r.dropped.len(), 1, "{:?}", r.dropped);
-    assert!(r.dropped[0].spaces.iter().any(|s| s.contains("Island")), "{:?}", r.dropped);
-    assert!(!b.vertices.iter().any(|v| v.label.as_deref() == Some("Island")));
+    assert!(
+        r.dropped[0].spaces.iter().any(|s| s.contains("Island")),
+        "{:?}",
+        r.dropped
+    );
+    assert!(
+        !b.vertices
+            .iter()
+            .any(|v| v.label.as_deref() == Some("Island"))
+    );
     // The overlapping room, the room without a level and the open way are all in.
     for room in ["Overlapping", "No level", "Open way"] {
-        assert!(b.vertices.iter().any(|v| v.label.as_deref() == Some(room)), "{room}");
+        assert!(
+            b.vertices.iter().any(|v| v.label.as_deref() == Some(room)),
+            "{room}"
+        );
     }
     check_walkable(&b);
 }
 
 #[test]
 fn nothing_walkable_is_refused_with_a_reason() {
-    let err = import_path(&fixtures().join("nothing-walkable.geojson"), &ImportOptions::default())
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("nothing-walkable.geojson") && err.contains("nothing walkable"), "{err}");
+    let err = import_path(
+        &fixtures().join("nothing-walkable.geojson"),
+        &ImportOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("nothing-walkable.geojson") && err.contains("nothing walkable"),
+        "{err}"
+    );
     // Projected coordinates are not GeoJSON.
     let text = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"indoor":"room","level":"0"},
         "geometry":{"type":"Polygon","coordinates":[[[500000,5400000],[500010,5400000],[500010,5400010],[500000,5400000]]]}}]}"#;
@@ -382,18 +448,44 @@ fn geo_and_outlines_are_validated() {
     );
     let b = Building::from_json(&ok, "ok.json").unwrap();
     assert_eq!(b.outlines.len(), 2);
-    assert_eq!(BuildingFile::parse(&b.to_file().to_json(), "again").unwrap(), b.to_file());
+    assert_eq!(
+        BuildingFile::parse(&b.to_file().to_json(), "again").unwrap(),
+        b.to_file()
+    );
     for (extra, needle) in [
         (r#""geo": {"lat": 91, "lon": 2}"#, "geo.lat"),
         (r#""geo": {"lat": 1, "lon": -181}"#, "geo.lon"),
-        (r#""outlines": [{"kind": "door", "points": [[0,0],[1,0],[1,1]]}]"#, "outlines[0].kind"),
-        (r#""outlines": [{"kind": "room", "points": [[0,0],[1,0]]}]"#, "at least 3 distinct points"),
-        (r#""outlines": [{"kind": "area", "points": [[0,0],[1,0],[1,1],[0,0]]}]"#, "repeats the first"),
-        (r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#, "outlines[0].points[1][0]"),
-        (r#""outlines": [{"kind": "wall", "points": [[0,0]]}]"#, "at least 2 points"),
-        (r#""outlines": [{"floor": 3, "kind": "room", "points": [[0,0],[1,0],[1,1]]}]"#, "outlines[0].floor"),
+        (
+            r#""outlines": [{"kind": "door", "points": [[0,0],[1,0],[1,1]]}]"#,
+            "outlines[0].kind",
+        ),
+        (
+            r#""outlines": [{"kind": "room", "points": [[0,0],[1,0]]}]"#,
+            "at least 3 distinct points",
+        ),
+        (
+            r#""outlines": [{"kind": "area", "points": [[0,0],[1,0],[1,1],[0,0]]}]"#,
+            "repeats the first",
+        ),
+        (
+            r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#,
+            "outlines[0].points[1][0]",
+        ),
+        (
+            r#""outlines": [{"kind": "wall", "points": [[0,0]]}]"#,
+            "at least 2 points",
+        ),
+        (
+            r#""outlines": [{"floor": 3, "kind": "room", "points": [[0,0],[1,0],[1,1]]}]"#,
+            "outlines[0].floor",
+        ),
     ] {
-        let err = Building::from_json(&base(extra), "bad.json").unwrap_err().to_string();
-        assert!(err.contains("bad.json") && err.contains(needle), "{extra}: {err}");
+        let err = Building::from_json(&base(extra), "bad.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.json") && err.contains(needle),
+            "{extra}: {err}"
+        );
     }
 }

@@ -48,8 +48,8 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     assert_eq!(r.walk.first().map(String::as_str), Some("b00"));
     assert_eq!(r.walk.last().map(String::as_str), Some("b00"));
     assert!(r.length_m <= 140.0 + 1e-9, "{} m", r.length_m);
-    let engine = trailprint::utility::UtilityEngine::new(b.clone(), req.kernel, req.model)
-        .expect("engine");
+    let engine =
+        trailprint::utility::UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
     let exact = engine.utility(&r.walk_indices).expect("utility");
     assert!((exact - r.utility_nats).abs() <= 1e-9 * exact.max(1.0));
     // The search's incumbent (greedy plus local search) is far better than the shortest

@@ -164,7 +164,10 @@ fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
     assert!(r.length_m >= 0.9 * budget, "{} m of {budget}", r.length_m);
     let lengths = obs.lengths.lock().expect("lock").clone();
     assert!(!lengths.is_empty(), "no progress report carried a length");
-    assert!(lengths.iter().all(|&l| l > 0.0 && l <= budget + 1e-9), "{lengths:?}");
+    assert!(
+        lengths.iter().all(|&l| l > 0.0 && l <= budget + 1e-9),
+        "{lengths:?}"
+    );
 }
 
 #[test]
@@ -178,7 +181,10 @@ fn a_request_beyond_the_memory_budget_is_refused_before_allocating() {
     assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
     let msg = e.to_string();
     assert!(matches!(e, Error::InvalidRequest(_)), "{e:?}");
-    assert!(msg.contains("6000 vertices") && msg.contains("MiB") && msg.contains("memory budget"), "{msg}");
+    assert!(
+        msg.contains("6000 vertices") && msg.contains("MiB") && msg.contains("memory budget"),
+        "{msg}"
+    );
     // The same building plans once the budget allows it... on a small one: 1 MiB is too
     // little even for 20 vertices' planning threads, 512 MiB is plenty.
     let small = line(20);
@@ -196,7 +202,10 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
     req.algorithm = Algorithm::Genetic;
     let e = plan(b, &req, &Control::new()).expect_err("refused");
     let msg = e.to_string();
-    assert!(msg.contains("100000 m") && msg.contains("at most 16.0 m"), "{msg}");
+    assert!(
+        msg.contains("100000 m") && msg.contains("at most 16.0 m"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -207,8 +216,15 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let mut req = PlanRequest::new(&start, &start, budget, k);
     req.model = SurveyorModel::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-    let p = Problem::new(b.clone(), k, req.model, r.walk_indices[0], r.walk_indices[0], budget)
-        .expect("problem");
+    let p = Problem::new(
+        b.clone(),
+        k,
+        req.model,
+        r.walk_indices[0],
+        r.walk_indices[0],
+        budget,
+    )
+    .expect("problem");
     let per_100m = 100.0 * reversals(&p, &r.walk_indices) as f64 / r.length_m;
     assert!(per_100m <= 2.0, "{per_100m} reversals per 100 m");
 }

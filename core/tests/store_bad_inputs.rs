@@ -267,9 +267,11 @@ fn read_only_locations_give_one_clear_error() {
     let a1 = a1_copy.to_str().expect("utf-8");
     // The temporary directory's own ancestors must let `nobody` through; where they do not
     // (TMPDIR inside a private directory), this part cannot apply and is skipped, saying so.
-    let reachable = dir.path().ancestors().skip(1).all(|d| {
-        std::fs::metadata(d).is_ok_and(|m| m.permissions().mode() & 0o001 != 0)
-    });
+    let reachable = dir
+        .path()
+        .ancestors()
+        .skip(1)
+        .all(|d| std::fs::metadata(d).is_ok_and(|m| m.permissions().mode() & 0o001 != 0));
     if as_root && !reachable {
         eprintln!(
             "skipped the read-only database case: user nobody cannot reach {} \
@@ -464,7 +466,11 @@ fn a_database_failing_quick_check_is_refused_before_anything_is_written() {
     // Commands that write are refused; listing (which does not read that page) may run.
     refused_untouched_when(
         &db,
-        &[db.to_str().expect("utf-8"), "corrupt", "nothing was written"],
+        &[
+            db.to_str().expect("utf-8"),
+            "corrupt",
+            "nothing was written",
+        ],
         false,
     );
 }

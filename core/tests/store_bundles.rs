@@ -330,7 +330,9 @@ fn a_shared_event_that_differs_in_a_reading_is_a_conflict() {
         .expect_err("conflict")
         .to_string();
     assert!(
-        e.contains(&format!("(session {uid}): conflicting histories at event 3")),
+        e.contains(&format!(
+            "(session {uid}): conflicting histories at event 3"
+        )),
         "{e}"
     );
     assert!(e.contains("-99") && e.contains("-51"), "{e}");

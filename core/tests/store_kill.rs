@@ -216,5 +216,8 @@ fn sigkill_during_import_leaves_the_previous_state() {
     assert!(mid >= 20);
     // The point of the small page cache: some kills must really catch uncommitted pages
     // in the WAL, or this test only ever kills before anything reached the disk.
-    assert!(spilled >= 1, "no mid-transaction kill left frames in the WAL");
+    assert!(
+        spilled >= 1,
+        "no mid-transaction kill left frames in the WAL"
+    );
 }

@@ -139,7 +139,10 @@ fn a_failing_step_leaves_the_previous_version() {
     // The store refuses it before migrating (issue 14: not ours), byte for byte untouched.
     let before = std::fs::read(&path).expect("bytes");
     let err = Store::open(&path).expect_err("clash");
-    assert!(err.to_string().contains("not a trailprint database"), "{err}");
+    assert!(
+        err.to_string().contains("not a trailprint database"),
+        "{err}"
+    );
     assert_eq!(std::fs::read(&path).expect("bytes"), before);
     // The migrator run on it anyway fails at step 1 and leaves version 0.
     let mut conn = Connection::open(&path).expect("open");

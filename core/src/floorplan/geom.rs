@@ -68,10 +68,10 @@ pub(crate) fn dominant_angle(poly: &Polygon<f64>) -> f64 {
         let bin = ((a / quarter * 90.0).round() as usize) % 90;
         bins[bin] += len;
     }
-    let (best, _) = bins
-        .iter()
-        .enumerate()
-        .fold((0, -1.0), |acc, (i, &w)| if w > acc.1 { (i, w) } else { acc });
+    let (best, _) = bins.iter().enumerate().fold(
+        (0, -1.0),
+        |acc, (i, &w)| if w > acc.1 { (i, w) } else { acc },
+    );
     // Refine: the length-weighted mean angle of the edges in the winning bin.
     let (mut sum, mut weight) = (0.0, 0.0);
     for line in poly.exterior().lines() {
@@ -84,7 +84,11 @@ pub(crate) fn dominant_angle(poly: &Polygon<f64>) -> f64 {
         let bin = ((a / quarter * 90.0).round() as usize) % 90;
         if bin == best {
             // Unwrap angles near 90 degrees onto 0 so that the mean does not split them.
-            let a = if best == 0 && a > quarter / 2.0 { a - quarter } else { a };
+            let a = if best == 0 && a > quarter / 2.0 {
+                a - quarter
+            } else {
+                a
+            };
             sum += a * len;
             weight += len;
         }
@@ -138,10 +142,7 @@ pub(crate) fn grid_points(poly: &Polygon<f64>, spacing: f64, clearance: f64) -> 
     let mut out = Vec::new();
     for row in 0..nv {
         for col in 0..nu {
-            let pos = from_uv(
-                u0 + (col as f64 + 0.5) * du,
-                v0 + (row as f64 + 0.5) * dv,
-            );
+            let pos = from_uv(u0 + (col as f64 + 0.5) * du, v0 + (row as f64 + 0.5) * dv);
             if poly.contains(&Point(pos)) && boundary_distance(poly, pos) >= clearance {
                 out.push(GridPoint { row, col, pos });
             }
@@ -238,7 +239,11 @@ pub(crate) fn shared_runs(a: &Polygon<f64>, b: &Polygon<f64>, tol: f64) -> Vec<R
 
 /// Points where the segment `a b` meets the wall lines (a touching or overlapping wall
 /// counts too).
-pub(crate) fn wall_crossings(a: Coord<f64>, b: Coord<f64>, walls: &[&LineString<f64>]) -> Vec<Coord<f64>> {
+pub(crate) fn wall_crossings(
+    a: Coord<f64>,
+    b: Coord<f64>,
+    walls: &[&LineString<f64>],
+) -> Vec<Coord<f64>> {
     let seg = Line::new(a, b);
     let mut out = Vec::new();
     for w in walls {
@@ -288,11 +293,15 @@ mod tests {
     #[test]
     fn shared_boundary_middle() {
         let room = polygon![(x: 0.0, y: 2.0), (x: 4.0, y: 2.0), (x: 4.0, y: 6.0), (x: 0.0, y: 6.0)];
-        let corridor = polygon![(x: -10.0, y: 0.0), (x: 10.0, y: 0.0), (x: 10.0, y: 2.0), (x: -10.0, y: 2.0)];
+        let corridor =
+            polygon![(x: -10.0, y: 0.0), (x: 10.0, y: 0.0), (x: 10.0, y: 2.0), (x: -10.0, y: 2.0)];
         let runs = shared_runs(&room, &corridor, 0.15);
         assert_eq!(runs.len(), 1);
         // 4 m along the corridor, plus the 0.15 m tolerance up each side wall.
         assert!((runs[0].length - 4.0).abs() < 0.45, "{runs:?}");
-        assert!(dist(runs[0].middle(), Coord { x: 2.0, y: 2.0 }) < 0.1, "{runs:?}");
+        assert!(
+            dist(runs[0].middle(), Coord { x: 2.0, y: 2.0 }) < 0.1,
+            "{runs:?}"
+        );
     }
 }

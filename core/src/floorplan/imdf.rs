@@ -24,8 +24,8 @@ use serde_json::Value;
 
 use super::osm::{Shapes, read_features, stack_shafts};
 use super::{
-    Connector, ConnectorKind, Door, LocalFrame, Plan, Space, SpaceKind, Warnings,
-    floors_of_levels, level_key, origin_of,
+    Connector, ConnectorKind, Door, LocalFrame, Plan, Space, SpaceKind, Warnings, floors_of_levels,
+    level_key, origin_of,
 };
 use crate::{Error, Result};
 
@@ -56,18 +56,21 @@ fn files_of(path: &Path) -> Result<HashMap<String, String>> {
     })?;
     for i in 0..zip.len() {
         let mut member = zip.by_index(i).map_err(|e| {
-            Error::invalid(&path.display().to_string(), format!("member {i}"), e.to_string())
+            Error::invalid(
+                &path.display().to_string(),
+                format!("member {i}"),
+                e.to_string(),
+            )
         })?;
         // IMDF archives hold the files at the top; some tools add a folder around them.
-        let full = member
-            .name()
-            .map(|n| n.into_owned())
-            .map_err(|e| Error::invalid(&path.display().to_string(), format!("member {i}"), e.to_string()))?;
-        let name = full
-            .rsplit('/')
-            .next()
-            .unwrap_or_default()
-            .to_lowercase();
+        let full = member.name().map(|n| n.into_owned()).map_err(|e| {
+            Error::invalid(
+                &path.display().to_string(),
+                format!("member {i}"),
+                e.to_string(),
+            )
+        })?;
+        let name = full.rsplit('/').next().unwrap_or_default().to_lowercase();
         if !(name.ends_with(".geojson") || name == "manifest.json") {
             continue;
         }
@@ -75,7 +78,10 @@ fn files_of(path: &Path) -> Result<HashMap<String, String>> {
             return Err(Error::invalid(
                 &path.display().to_string(),
                 &name,
-                format!("member is {} bytes, over the limit of {MAX_MEMBER_BYTES}", member.size()),
+                format!(
+                    "member is {} bytes, over the limit of {MAX_MEMBER_BYTES}",
+                    member.size()
+                ),
             ));
         }
         let mut text = String::new();
@@ -116,7 +122,9 @@ fn fid(f: &Feature, i: usize) -> String {
 
 fn unit_kind(category: &str) -> Option<SpaceKind> {
     Some(match category {
-        "walkway" | "walkway.island" | "footbridge" | "ramp" | "movingwalkway" => SpaceKind::Corridor,
+        "walkway" | "walkway.island" | "footbridge" | "ramp" | "movingwalkway" => {
+            SpaceKind::Corridor
+        }
         "lobby" | "unenclosedarea" | "platform" | "terrace" | "waitingroom" => SpaceKind::Area,
         "elevator" => SpaceKind::Elevator,
         "stairs" | "steps" | "escalator" => SpaceKind::Stairs,
@@ -151,7 +159,12 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
     let buildings = layer("building.geojson", false, &mut warnings)?;
 
     let mut all = Vec::new();
-    for (_, f) in levels.iter().chain(&units).chain(&openings).chain(&amenities) {
+    for (_, f) in levels
+        .iter()
+        .chain(&units)
+        .chain(&openings)
+        .chain(&amenities)
+    {
         if let Some(g) = &f.geometry {
             collect(&g.value, &mut all);
         }
@@ -223,7 +236,9 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
     let mut places: HashMap<String, Vec<(i64, Coord<f64>)>> = HashMap::new();
     for (i, f) in &units {
         let id = fid(f, *i);
-        let category = prop(f, "category").and_then(Value::as_str).unwrap_or("unspecified");
+        let category = prop(f, "category")
+            .and_then(Value::as_str)
+            .unwrap_or("unspecified");
         let Some(fl) = floor_of_level(prop(f, "level_id")) else {
             shapes
                 .warnings
@@ -238,11 +253,17 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
         if let Some(p) = polys.first().and_then(|p| p.interior_point()) {
             places.entry(id.clone()).or_default().push((fl, p.0));
         }
-        let Some(kind) = unit_kind(category) else { continue };
+        let Some(kind) = unit_kind(category) else {
+            continue;
+        };
         let name = label(prop(f, "name"));
         for (k, polygon) in polys.into_iter().enumerate() {
             spaces.push(Space {
-                source: if k == 0 { id.clone() } else { format!("{id}#{k}") },
+                source: if k == 0 {
+                    id.clone()
+                } else {
+                    format!("{id}#{k}")
+                },
                 name: name.clone(),
                 kind,
                 floor: fl,
@@ -259,7 +280,11 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
                 .add("openings on an unknown level (skipped)", id);
             continue;
         };
-        match f.geometry.as_ref().and_then(|g| shapes.point(&g.value, &id)) {
+        match f
+            .geometry
+            .as_ref()
+            .and_then(|g| shapes.point(&g.value, &id))
+        {
             Some(pos) => {
                 places.entry(id.clone()).or_default().push((fl, pos));
                 doors.push(Door {
@@ -281,7 +306,11 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
     let mut connectors = Vec::new();
     for (i, f) in &amenities {
         let id = fid(f, *i);
-        let Some(pos) = f.geometry.as_ref().and_then(|g| shapes.point(&g.value, &id)) else {
+        let Some(pos) = f
+            .geometry
+            .as_ref()
+            .and_then(|g| shapes.point(&g.value, &id))
+        else {
             continue;
         };
         let unit_floors: Vec<i64> = prop(f, "unit_ids")
@@ -294,10 +323,14 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
                     .collect()
             })
             .unwrap_or_default();
-        places.entry(id.clone()).or_default().extend(unit_floors.iter().map(|&fl| (fl, pos)));
+        places
+            .entry(id.clone())
+            .or_default()
+            .extend(unit_floors.iter().map(|&fl| (fl, pos)));
         let category = prop(f, "category").and_then(Value::as_str).unwrap_or("");
         if let Some(kind) = vertical(category) {
-            let mut stops: Vec<(i64, Coord<f64>)> = unit_floors.iter().map(|&fl| (fl, pos)).collect();
+            let mut stops: Vec<(i64, Coord<f64>)> =
+                unit_floors.iter().map(|&fl| (fl, pos)).collect();
             stops.sort_by_key(|s| s.0);
             stops.dedup_by_key(|s| s.0);
             if stops.len() >= 2 {
@@ -312,7 +345,9 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
     for (i, f) in &relationships {
         let id = fid(f, *i);
         let category = prop(f, "category").and_then(Value::as_str).unwrap_or("");
-        let Some(kind) = vertical(category) else { continue };
+        let Some(kind) = vertical(category) else {
+            continue;
+        };
         let mut refs: Vec<&Value> = Vec::new();
         refs.extend(prop(f, "origin"));
         if let Some(Value::Array(list)) = prop(f, "intermediary") {
@@ -321,7 +356,9 @@ pub(crate) fn read(path: &Path) -> Result<Plan> {
         refs.extend(prop(f, "destination"));
         let mut stops: Vec<(i64, Coord<f64>)> = Vec::new();
         for r in refs {
-            let Some(rid) = r.get("id").and_then(Value::as_str) else { continue };
+            let Some(rid) = r.get("id").and_then(Value::as_str) else {
+                continue;
+            };
             match places.get(rid) {
                 Some(ps) => {
                     for &(fl, p) in ps {

@@ -21,8 +21,8 @@
 //! with nothing walkable is refused.
 
 pub mod frame;
-pub mod imdf;
 pub(crate) mod geom;
+pub mod imdf;
 pub(crate) mod network;
 pub mod osm;
 
@@ -168,11 +168,21 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<FloorplanImpo
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "floor plan".into());
-    finish(plan, format, options, &fallback, &path.display().to_string())
+    finish(
+        plan,
+        format,
+        options,
+        &fallback,
+        &path.display().to_string(),
+    )
 }
 
 /// Imports OSM indoor GeoJSON text; `origin` names it in errors and is the fallback name.
-pub fn import_osm_text(text: &str, origin: &str, options: &ImportOptions) -> Result<FloorplanImport> {
+pub fn import_osm_text(
+    text: &str,
+    origin: &str,
+    options: &ImportOptions,
+) -> Result<FloorplanImport> {
     check_spacing(options.spacing_m)?;
     let plan = osm::parse(text, origin)?;
     finish(plan, Format::OsmIndoor, options, origin, origin)

@@ -146,9 +146,9 @@ impl FloorCtx<'_> {
             return true;
         }
         let portals = net.portals.get(&self.floor);
-        geom::wall_crossings(a, b, &self.walls).into_iter().all(|c| {
-            portals.is_some_and(|ps| ps.iter().any(|p| dist(*p, c) <= JOIN_TOL_M))
-        })
+        geom::wall_crossings(a, b, &self.walls)
+            .into_iter()
+            .all(|c| portals.is_some_and(|ps| ps.iter().any(|p| dist(*p, c) <= JOIN_TOL_M)))
     }
 }
 
@@ -226,7 +226,9 @@ pub(crate) fn build(
                     "nothing walkable: no polygon tagged indoor=room, indoor=corridor or \
                      indoor=area (Simple Indoor Tagging) with a readable outline"
                 }
-                Format::Imdf => "nothing walkable: no unit with a walkable category and a readable outline",
+                Format::Imdf => {
+                    "nothing walkable: no unit with a walkable category and a readable outline"
+                }
             },
         ));
     }
@@ -255,7 +257,9 @@ pub(crate) fn build(
                 net.portals.entry(f).or_default().push(d.pos);
             }
         }
-        let on_floor: Vec<usize> = (0..spaces.len()).filter(|&i| spaces[i].floor == f).collect();
+        let on_floor: Vec<usize> = (0..spaces.len())
+            .filter(|&i| spaces[i].floor == f)
+            .collect();
 
         // 1. The grid of each space.
         for &si in &on_floor {
@@ -495,7 +499,11 @@ pub(crate) fn build(
                             // Step 0.2 m inside, towards the space's inner point.
                             let inner = spaces[si].polygon.interior_point().map_or(q, |ip| ip.0);
                             let d = dist(q, inner);
-                            let pos = if d > 0.2 { q + (inner - q) * (0.2 / d) } else { q };
+                            let pos = if d > 0.2 {
+                                q + (inner - q) * (0.2 / d)
+                            } else {
+                                q
+                            };
                             (si, pos)
                         }
                         None => {
@@ -544,7 +552,11 @@ pub(crate) fn build(
                 for (i, a) in stops.iter().enumerate() {
                     for b in &stops[i + 1..] {
                         let levels = (b.0 - a.0) as f64;
-                        net.edge(a.2, b.2, Some(ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL * levels));
+                        net.edge(
+                            a.2,
+                            b.2,
+                            Some(ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL * levels),
+                        );
                     }
                 }
             }
@@ -617,7 +629,10 @@ pub(crate) fn build(
         });
     }
     dropped.sort_by_key(|d| std::cmp::Reverse(d.vertices));
-    let kept: HashSet<usize> = comps.get(keep).map(|m| m.iter().copied().collect()).unwrap_or_default();
+    let kept: HashSet<usize> = comps
+        .get(keep)
+        .map(|m| m.iter().copied().collect())
+        .unwrap_or_default();
 
     // 6. The building file.
     let kept_floors: BTreeSet<i64> = kept.iter().map(|&v| net.verts[v].floor).collect();
@@ -665,8 +680,10 @@ pub(crate) fn build(
         if pts.len() > 1 && pts.first() == pts.last() {
             pts.pop();
         }
-        let distinct: BTreeSet<(u64, u64)> =
-            pts.iter().map(|p| (p[0].to_bits(), p[1].to_bits())).collect();
+        let distinct: BTreeSet<(u64, u64)> = pts
+            .iter()
+            .map(|p| (p[0].to_bits(), p[1].to_bits()))
+            .collect();
         (distinct.len() >= 3).then_some(pts)
     };
     for (f, poly) in &building_outlines {
@@ -779,7 +796,9 @@ fn fill_gaps(
     label: Option<String>,
     what: &str,
 ) {
-    let Some(bb) = poly.bounding_rect() else { return };
+    let Some(bb) = poly.bounding_rect() else {
+        return;
+    };
     let step = spacing / 2.0;
     let mut cands: Vec<(Coord<f64>, f64)> = Vec::new();
     let nx = ((bb.width() / step).floor() as usize).min(4000);

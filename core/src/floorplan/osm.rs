@@ -197,7 +197,12 @@ pub(crate) struct Shapes<'a> {
 impl Shapes<'_> {
     fn coord(&self, p: &Position) -> Option<Coord<f64>> {
         let s = p.as_slice();
-        if s.len() < 2 || !s[0].is_finite() || !s[1].is_finite() || s[0].abs() > 180.0 || s[1].abs() > 90.0 {
+        if s.len() < 2
+            || !s[0].is_finite()
+            || !s[1].is_finite()
+            || s[0].abs() > 180.0
+            || s[1].abs() > 90.0
+        {
             return None;
         }
         let (x, y) = self.frame.to_local(s[0], s[1]);
@@ -216,8 +221,10 @@ impl Shapes<'_> {
                     }
                 }
                 None => {
-                    self.warnings
-                        .add("features with coordinates that are not longitude/latitude (skipped)", id);
+                    self.warnings.add(
+                        "features with coordinates that are not longitude/latitude (skipped)",
+                        id,
+                    );
                     return None;
                 }
             }
@@ -244,7 +251,9 @@ impl Shapes<'_> {
         let mut out = Vec::new();
         let mut one = |s: &mut Self, rings: &[Vec<Position>], warn_open: bool| {
             let Some(first) = rings.first() else { return };
-            let Some(ext) = s.ring(first, id, warn_open) else { return };
+            let Some(ext) = s.ring(first, id, warn_open) else {
+                return;
+            };
             let holes: Vec<LineString<f64>> = rings[1..]
                 .iter()
                 .filter_map(|r| s.ring(r, id, warn_open))
@@ -255,8 +264,10 @@ impl Shapes<'_> {
                 return;
             }
             if !poly.is_valid() {
-                s.warnings
-                    .add("self-intersecting or otherwise invalid outlines (used as drawn)", id);
+                s.warnings.add(
+                    "self-intersecting or otherwise invalid outlines (used as drawn)",
+                    id,
+                );
             }
             out.push(poly);
         };
@@ -287,19 +298,18 @@ impl Shapes<'_> {
         };
         match g {
             GeometryValue::LineString { coordinates } => out.extend(line(self, coordinates)),
-            GeometryValue::MultiLineString { coordinates } | GeometryValue::Polygon { coordinates } => {
+            GeometryValue::MultiLineString { coordinates }
+            | GeometryValue::Polygon { coordinates } => {
                 out.extend(coordinates.iter().filter_map(|c| line(self, c)))
             }
-            GeometryValue::MultiPolygon { coordinates } => out.extend(
-                coordinates
-                    .iter()
-                    .flatten()
-                    .filter_map(|c| line(self, c)),
-            ),
+            GeometryValue::MultiPolygon { coordinates } => {
+                out.extend(coordinates.iter().flatten().filter_map(|c| line(self, c)))
+            }
             _ => {}
         }
         if out.is_empty() {
-            self.warnings.add("walls without a readable line (skipped)", id);
+            self.warnings
+                .add("walls without a readable line (skipped)", id);
         }
         out
     }
@@ -337,9 +347,14 @@ enum Role {
 fn role_of(tags: &BTreeMap<String, String>, g: &GeometryValue) -> Option<Role> {
     let t = |k: &str| tags.get(k).map(String::as_str);
     let is_point = matches!(g, GeometryValue::Point { .. });
-    let is_line = matches!(g, GeometryValue::LineString { .. } | GeometryValue::MultiLineString { .. });
-    let is_area = matches!(g, GeometryValue::Polygon { .. } | GeometryValue::MultiPolygon { .. })
-        || matches!(g, GeometryValue::LineString { coordinates } if coordinates.len() >= 4
+    let is_line = matches!(
+        g,
+        GeometryValue::LineString { .. } | GeometryValue::MultiLineString { .. }
+    );
+    let is_area = matches!(
+        g,
+        GeometryValue::Polygon { .. } | GeometryValue::MultiPolygon { .. }
+    ) || matches!(g, GeometryValue::LineString { coordinates } if coordinates.len() >= 4
             && coordinates.first() == coordinates.last());
     let elevator = t("highway") == Some("elevator");
     let steps = t("highway") == Some("steps")
@@ -347,7 +362,11 @@ fn role_of(tags: &BTreeMap<String, String>, g: &GeometryValue) -> Option<Role> {
         || tags.contains_key("conveying");
     let indoor = t("indoor");
     if elevator {
-        return Some(if is_point { Role::Elevator } else { Role::Space(SpaceKind::Elevator) });
+        return Some(if is_point {
+            Role::Elevator
+        } else {
+            Role::Space(SpaceKind::Elevator)
+        });
     }
     if indoor == Some("door")
         || (is_point && (tags.contains_key("door") || tags.contains_key("entrance")))
@@ -497,7 +516,11 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Plan> {
                     k => k,
                 };
                 for (k, poly) in polys.into_iter().enumerate() {
-                    let source = if k == 0 { r.id.clone() } else { format!("{}#{k}", r.id) };
+                    let source = if k == 0 {
+                        r.id.clone()
+                    } else {
+                        format!("{}#{k}", r.id)
+                    };
                     if multi && matches!(kind, SpaceKind::Stairs | SpaceKind::Elevator) {
                         let p = poly.interior_point().map_or(poly.exterior().0[0], |p| p.0);
                         connectors.push(Connector {
@@ -534,9 +557,10 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Plan> {
             Role::Door => match shapes.point(&r.geometry, &r.id) {
                 Some(pos) => {
                     if r.levels.is_none() {
-                        shapes
-                            .warnings
-                            .add("doors without a level (joined on every level they touch)", r.id.clone());
+                        shapes.warnings.add(
+                            "doors without a level (joined on every level they touch)",
+                            r.id.clone(),
+                        );
                     }
                     doors.push(Door {
                         source: r.id.clone(),
@@ -544,7 +568,9 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Plan> {
                         floors: r.levels.as_ref().map(|_| levels.clone()),
                     });
                 }
-                None => shapes.warnings.add("doors without a readable position (skipped)", r.id.clone()),
+                None => shapes
+                    .warnings
+                    .add("doors without a readable position (skipped)", r.id.clone()),
             },
             Role::Elevator => match shapes.point(&r.geometry, &r.id) {
                 Some(p) => connectors.push(Connector {
@@ -552,9 +578,10 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Plan> {
                     kind: ConnectorKind::Elevator,
                     stops: levels.iter().map(|&f| (f, p)).collect(),
                 }),
-                None => shapes
-                    .warnings
-                    .add("elevators without a readable position (skipped)", r.id.clone()),
+                None => shapes.warnings.add(
+                    "elevators without a readable position (skipped)",
+                    r.id.clone(),
+                ),
             },
             Role::Steps => {
                 let lines = shapes.lines(&r.geometry, &r.id);
@@ -633,7 +660,10 @@ pub(crate) fn stack_shafts(plan: &mut Plan) {
             continue;
         }
         let sa = &plan.spaces[a];
-        let pa = sa.polygon.interior_point().map_or(sa.polygon.exterior().0[0], |p| p.0);
+        let pa = sa
+            .polygon
+            .interior_point()
+            .map_or(sa.polygon.exterior().0[0], |p| p.0);
         let mut group = vec![(sa.floor, pa)];
         used[a] = true;
         for &b in &shafts {
@@ -641,7 +671,10 @@ pub(crate) fn stack_shafts(plan: &mut Plan) {
             if used[b] || sb.kind != sa.kind || group.iter().any(|g| g.0 == sb.floor) {
                 continue;
             }
-            let pb = sb.polygon.interior_point().map_or(sb.polygon.exterior().0[0], |p| p.0);
+            let pb = sb
+                .polygon
+                .interior_point()
+                .map_or(sb.polygon.exterior().0[0], |p| p.0);
             if sa.polygon.contains(&geo::Point(pb)) || sb.polygon.contains(&geo::Point(pa)) {
                 group.push((sb.floor, pb));
                 used[b] = true;

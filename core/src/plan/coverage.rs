@@ -206,12 +206,19 @@ pub fn leg(
                 continue;
             }
             let (da, db) = (m.dist(cur, ed.a), m.dist(cur, ed.b));
-            let (x, y, reach) = if da <= db { (ed.a, ed.b, da) } else { (ed.b, ed.a, db) };
+            let (x, y, reach) = if da <= db {
+                (ed.a, ed.b, da)
+            } else {
+                (ed.b, ed.a, db)
+            };
             if !reach.is_finite() {
                 continue;
             }
             let mut class = usize::from(marks.near[e]);
-            if spec.avoid_reversals && !dead_end && let Some(pv) = prev {
+            if spec.avoid_reversals
+                && !dead_end
+                && let Some(pv) = prev
+            {
                 let hop = if x == cur { y } else { m.next_hop(cur, x) };
                 if hop == pv {
                     class += 2;

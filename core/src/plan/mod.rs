@@ -857,7 +857,11 @@ fn best_so_far(problem: &Problem, run: &Run, termination: Termination) -> Result
 pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> u64 {
     let nv = building.len() as f64;
     let nd = (building.pilot.len() + prior) as f64;
-    let budget = if req.budget.is_finite() { req.budget } else { 0.0 };
+    let budget = if req.budget.is_finite() {
+        req.budget
+    } else {
+        0.0
+    };
     let ns = budget / req.model.spacing().max(1e-3) + 2.0;
     let metric = 12.0 * nv * nv;
     let engine = 8.0 * (2.0 * nv * nv + nd * nd + 2.0 * nd * nv);
@@ -868,7 +872,11 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     // `L` and `W` per sample).
     let whole_walks = matches!(req.algorithm, Algorithm::Auto | Algorithm::Coverage)
         && building.len() > auto::LARGE_VERTICES;
-    let incremental = if whole_walks { 0.0 } else { 2.0 * ns * (nd + ns + nv) };
+    let incremental = if whole_walks {
+        0.0
+    } else {
+        2.0 * ns * (nd + ns + nv)
+    };
     // Branch and bound keeps a saved posterior (`|V| x |V|`) per level of its depth-first
     // search, one level per edge of the deepest walk.
     let min_edge = building

@@ -208,12 +208,13 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         })
         .collect();
     stats.surrogate_evals += built.len();
-    let (mut cur, mut cur_s) = built
-        .iter()
-        .cloned()
-        .fold((Vec::new(), f64::NEG_INFINITY), |a, b| {
-            if b.1 > a.1 { b } else { a }
-        });
+    let (mut cur, mut cur_s) =
+        built
+            .iter()
+            .cloned()
+            .fold((Vec::new(), f64::NEG_INFINITY), |a, b| {
+                if b.1 > a.1 { b } else { a }
+            });
     let first = cur.clone();
     // How long one exact evaluation of a full-budget walk will take, from the time of a
     // surrogate evaluation scaled by the cube of the matrix sizes (with a margin for the
@@ -230,10 +231,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         p.offer(run, &cur, u);
         offered_s = cur_s;
     }
-    report(
-        0.1,
-        format!("spread construction, {:.0} m", p.length(&cur)),
-    );
+    report(0.1, format!("spread construction, {:.0} m", p.length(&cur)));
 
     // 2. Large-neighbourhood search until the time left is what the final exact
     //    comparison needs (three walks, in parallel on two threads: two rounds), or a
@@ -336,7 +334,10 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     for (w, u) in finalists.into_iter().zip(exact) {
         let u = u?;
         p.offer(run, &w, u);
-        if out.as_ref().is_none_or(|(bw, bu)| better((&w, u), (bw, *bu))) {
+        if out
+            .as_ref()
+            .is_none_or(|(bw, bu)| better((&w, u), (bw, *bu)))
+        {
             out = Some((w, u));
         }
     }

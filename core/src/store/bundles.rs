@@ -414,7 +414,10 @@ fn import_in_tx(
                 )));
             }
             match (&e.event, &h.event) {
-                (SessionEvent::Replan { plan_id: theirs }, SessionEvent::Replan { plan_id: ours }) => {
+                (
+                    SessionEvent::Replan { plan_id: theirs },
+                    SessionEvent::Replan { plan_id: ours },
+                ) => {
                     let bundled = s.plans.iter().find(|p| p.source_id == *theirs);
                     let local = super::plans::load(&tx, *ours)?;
                     if bundled.map(|p| &p.plan) != Some(&local.record) {

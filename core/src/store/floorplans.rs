@@ -23,7 +23,11 @@ pub(super) fn save(tx: &Connection, id: i64, b: &Building) -> Result<()> {
 }
 
 /// Reads the building's `geo` and `outlines` (none when it came from a plain file).
-pub(super) fn load(conn: &Connection, id: i64, db: &str) -> Result<(Option<GeoOrigin>, Vec<Outline>)> {
+pub(super) fn load(
+    conn: &Connection,
+    id: i64,
+    db: &str,
+) -> Result<(Option<GeoOrigin>, Vec<Outline>)> {
     let row: Option<(Option<f64>, Option<f64>, String)> = conn
         .query_row(
             "SELECT geo_lat, geo_lon, outlines FROM building_floorplans WHERE building_id = ?1",

@@ -156,7 +156,9 @@ pub(crate) fn inspect(conn: &Connection, path: &str) -> Result<u32> {
         path: path.to_string(),
         message,
     };
-    let tx = conn.unchecked_transaction().map_err(|e| open_error(path, e))?;
+    let tx = conn
+        .unchecked_transaction()
+        .map_err(|e| open_error(path, e))?;
     let found = check_version(&tx, path)?;
     let actual = schema_objects(&tx).map_err(|e| open_error(path, e))?;
     let expected = expected_schemas()?
@@ -177,7 +179,11 @@ pub(crate) fn inspect(conn: &Connection, path: &str) -> Result<u32> {
              schema object(s) ({}{}); it was left untouched (use another --db)",
             actual.len(),
             shown.join(", "),
-            if names.len() > shown.len() { ", ..." } else { "" }
+            if names.len() > shown.len() {
+                ", ..."
+            } else {
+                ""
+            }
         )));
     }
     for want in expected {

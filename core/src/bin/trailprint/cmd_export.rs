@@ -111,7 +111,11 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
 /// or from the database (pilot data and every session).
 fn scans(args: &Args, db: Option<&Path>) -> Result<()> {
     let (building, collected, people): (Building, _, _) = if is_file_spec(&args.name) {
-        (load_building(&args.name, db)?, Vec::new(), SessionPeople::new())
+        (
+            load_building(&args.name, db)?,
+            Vec::new(),
+            SessionPeople::new(),
+        )
     } else {
         let store = open_store(db)?;
         let bref = building_ref(&store, &args.name)?;

@@ -44,8 +44,8 @@ fn read_pilot(path: &Path) -> Result<Vec<Fingerprint>> {
         path,
         message,
     };
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| parse_err("$".into(), format!("not JSON: {e}")))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| parse_err("$".into(), format!("not JSON: {e}")))?;
     let (list, prefix) = match value {
         serde_json::Value::Array(_) => (value, ""),
         serde_json::Value::Object(mut m) => match m.remove("pilot") {
@@ -53,7 +53,8 @@ fn read_pilot(path: &Path) -> Result<Vec<Fingerprint>> {
             None => {
                 return Err(parse_err(
                     "$".into(),
-                    "expected a JSON array of fingerprints or an object with a `pilot` array".into(),
+                    "expected a JSON array of fingerprints or an object with a `pilot` array"
+                        .into(),
                 ));
             }
         },
@@ -67,18 +68,29 @@ fn read_pilot(path: &Path) -> Result<Vec<Fingerprint>> {
     let pilot: Vec<Fingerprint> = serde_path_to_error::deserialize(list).map_err(|e| {
         let p = e.path().to_string();
         parse_err(
-            if p == "." { format!("{prefix}$") } else { format!("{prefix}{p}") },
+            if p == "." {
+                format!("{prefix}$")
+            } else {
+                format!("{prefix}{p}")
+            },
             e.into_inner().to_string(),
         )
     })?;
     if pilot.is_empty() {
-        return Err(parse_err(prefix_or(prefix), "the pilot list is empty".into()));
+        return Err(parse_err(
+            prefix_or(prefix),
+            "the pilot list is empty".into(),
+        ));
     }
     Ok(pilot)
 }
 
 fn prefix_or(prefix: &str) -> String {
-    if prefix.is_empty() { "$".into() } else { prefix.into() }
+    if prefix.is_empty() {
+        "$".into()
+    } else {
+        prefix.into()
+    }
 }
 
 pub fn run(args: Args, db: Option<&Path>) -> Result<()> {

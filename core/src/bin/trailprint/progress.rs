@@ -54,7 +54,9 @@ impl Observer for StderrObserver {
         let best = p
             .best_utility
             .map_or("-".to_string(), |u| format!("{u:.2} nats"));
-        let len = p.best_length.map_or(String::new(), |l| format!(", {l:.0} m"));
+        let len = p
+            .best_length
+            .map_or(String::new(), |l| format!(", {l:.0} m"));
         let line = format!(
             "planning {:>5.1} s  best {best}{len}  ({}: {})",
             self.started.elapsed().as_secs_f64(),
@@ -120,7 +122,9 @@ impl Live {
                 while !done2.load(Ordering::Relaxed) {
                     if INTERRUPTS.load(Ordering::SeqCst) > 0 {
                         token.store(true, Ordering::Relaxed);
-                        eprintln!("\ninterrupted: stopping with the best walk so far (Ctrl-C again to quit)");
+                        eprintln!(
+                            "\ninterrupted: stopping with the best walk so far (Ctrl-C again to quit)"
+                        );
                         return;
                     }
                     std::thread::sleep(Duration::from_millis(20));
