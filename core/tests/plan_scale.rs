@@ -226,5 +226,6 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     )
     .expect("problem");
     let per_100m = 100.0 * reversals(&p, &r.walk_indices) as f64 / r.length_m;
-    assert!(per_100m <= 2.0, "{per_100m} reversals per 100 m");
+    // Measured: 0 to 0.5 per 100 m whatever the time the search gets (0.1 s to 4 s).
+    assert!(per_100m <= 1.0, "{per_100m} reversals per 100 m");
 }

@@ -276,6 +276,103 @@ pub fn reversals(p: &Problem, walk: &[usize]) -> usize {
         .count()
 }
 
+/// Removes reversals (see [`reversals`]) from `walk` where that keeps it within the
+/// budget, for a person to follow. Two repairs, tried at each reversal `A-B-A` in turn:
+/// * **Drop the spur** `B-A` when the edge `A-B` is walked at least once more elsewhere
+///   (the walk gets shorter and still covers every edge it covered);
+/// * **Go round**: from `B` take a neighbour other than `A` and the shortest path on to
+///   the vertex after the second `A` (or to the end), when that fits the budget.
+///
+/// A repair is kept only when it lowers the walk's reversal count, so the result never
+/// has more reversals than `walk`, starts and ends where `walk` does, and fits when
+/// `walk` fits.
+pub fn unpace(p: &Problem, walk: &[usize]) -> Vec<usize> {
+    let b = &p.building;
+    let m = &p.metric;
+    let mut w = walk.to_vec();
+    let mut revs = reversals(p, &w);
+    let mut len = p.length(&w);
+    let fits = |l: f64| l <= p.budget + super::BUDGET_EPS;
+    let mut k = 1;
+    while revs > 0 && k + 1 < w.len() {
+        let (a, bv) = (w[k - 1], w[k]);
+        if w[k + 1] != a || b.neighbours(bv).len() <= 1 {
+            k += 1;
+            continue;
+        }
+        // Drop the spur when the edge stays walked.
+        let uses = w
+            .windows(2)
+            .filter(|e| (e[0] == a && e[1] == bv) || (e[0] == bv && e[1] == a))
+            .count();
+        if uses >= 3 {
+            let mut cand = w[..k].to_vec();
+            cand.extend_from_slice(&w[k + 2..]);
+            let r = reversals(p, &cand);
+            if r < revs {
+                len = p.length(&cand);
+                w = cand;
+                revs = r;
+                k = k.saturating_sub(1).max(1);
+                continue;
+            }
+        }
+        // Go round: B -> x -> ... -> target, where target is the vertex after the second
+        // A (or A itself when the walk ends there).
+        let (target, resume) = if k + 2 < w.len() {
+            (w[k + 2], k + 3)
+        } else {
+            (a, k + 2)
+        };
+        let old = p.length(&w[k..resume]);
+        // Ways round: B -> x, or B -> x -> y, then the shortest path on; the one leaving
+        // the fewest reversals in the whole walk wins, then the shortest.
+        let mut starts: Vec<Vec<usize>> = Vec::new();
+        for &(x, _) in b.neighbours(bv) {
+            if x == a {
+                continue;
+            }
+            starts.push(vec![bv, x]);
+            for &(y, _) in b.neighbours(x) {
+                if y != bv {
+                    starts.push(vec![bv, x, y]);
+                }
+            }
+        }
+        let mut best: Option<(usize, f64, Vec<usize>)> = None;
+        for mut path in starts {
+            m.extend_path(&mut path, target);
+            if path.last() != Some(&target) {
+                continue;
+            }
+            let extra = p.length(&path) - old;
+            if !fits(len + extra) {
+                continue;
+            }
+            let mut cand = w[..k].to_vec();
+            cand.extend_from_slice(&path);
+            cand.extend_from_slice(&w[resume..]);
+            let r = reversals(p, &cand);
+            if best
+                .as_ref()
+                .is_none_or(|(br, be, _)| r < *br || (r == *br && extra < *be))
+            {
+                best = Some((r, extra, cand));
+            }
+        }
+        if let Some((r, _, cand)) = best
+            && r < revs
+        {
+            len = p.length(&cand);
+            w = cand;
+            revs = r;
+            continue;
+        }
+        k += 1;
+    }
+    w
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::Arc;
@@ -362,5 +459,33 @@ mod tests {
         // ... and its farthest vertex from the start is at least as far as the baseline's.
         let far = |w: &[usize]| w.iter().map(|&v| p.metric.dist(0, v)).fold(0.0, f64::max);
         assert!(far(&spread) >= far(&base), "{spread:?} vs {base:?}");
+    }
+
+    #[test]
+    fn unpace_goes_round_instead_of_walking_back_when_the_budget_allows() {
+        let b = lattice();
+        // v00 -> v01 -> v02 and straight back: a reversal at v02 (which has three
+        // neighbours).
+        let walk = vec![0, 1, 2, 1, 0];
+        let tight = problem(&b, 8.0);
+        assert_eq!(reversals(&tight, &walk), 1);
+        assert_eq!(unpace(&tight, &walk), walk, "no room to go round in 8 m");
+        let roomy = problem(&b, 12.0);
+        let w = unpace(&roomy, &walk);
+        assert_eq!(reversals(&roomy, &w), 0, "{w:?}");
+        assert_eq!((w[0], *w.last().expect("walk")), (0, 0));
+        assert!(roomy.length(&w) <= 12.0 + 1e-9, "{w:?}");
+        assert!(w.windows(2).all(|e| b.edge_between(e[0], e[1]).is_some()));
+    }
+
+    #[test]
+    fn unpace_drops_a_spur_walked_again_elsewhere() {
+        let b = lattice();
+        // v00 -> v01 -> v00 -> v01 -> v11 -> v10 -> v00: edge v00-v01 three times.
+        let walk = vec![0, 1, 0, 1, 5, 4, 0];
+        let p = problem(&b, 100.0);
+        assert_eq!(reversals(&p, &walk), 2);
+        let w = unpace(&p, &walk);
+        assert_eq!(w, vec![0, 1, 5, 4, 0]);
     }
 }

@@ -25,8 +25,10 @@
 //!    35% of its length) and rebuild it with a randomised spread leg that counts the rest
 //!    of the walk as walked; candidates are drawn with the seeded generator and evaluated
 //!    in parallel in batches; the best of a batch replaces the current walk when its
-//!    surrogate value is higher. For the human model the score subtracts a small penalty
-//!    per reversal (walking straight back at a vertex that is not a dead end).
+//!    surrogate value is higher. For the human model every walk has its reversals
+//!    (walking straight back at a vertex that is not a dead end) repaired where the
+//!    budget allows ([`super::coverage::unpace`]), and the score loses 1% per reversal
+//!    left.
 //! 3. **Exact comparison.** The search stops early enough to leave time for the exact
 //!    evaluation of the final candidates (the search's best, the best construction and
 //!    the plain `coverage` walk); the best by exact `f_D` is returned, so `auto` never
@@ -38,7 +40,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::coverage::{Leg, leg, reversals};
+use super::coverage::{Leg, leg, reversals, unpace};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::Result;
 use crate::samples::{SurveyorModel, sample_walk};
@@ -153,15 +155,32 @@ pub fn coarse_vertices(p: &Problem, cap: usize) -> Vec<usize> {
     }
 }
 
-/// The search score: the surrogate value, less a small penalty per reversal for a
-/// person (so that of two nearly equal walks the one without pacing wins).
-fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
-    let v = s.value(walk)?;
+/// Share of a walk's value that one reversal costs, for a person: a walk that paces back
+/// and forth must be worth 1% more per reversal to be preferred.
+const REVERSAL_PENALTY: f64 = 0.01;
+
+/// `value` of `walk` less [`REVERSAL_PENALTY`] per reversal for a person (the robot is
+/// judged by value alone).
+fn penalised(p: &Problem, walk: &[usize], value: f64) -> f64 {
     if matches!(p.engine.model(), SurveyorModel::Human { .. }) {
-        Ok(v * (1.0 - 0.003 * reversals(p, walk) as f64))
+        value * (1.0 - REVERSAL_PENALTY * reversals(p, walk) as f64).max(0.0)
     } else {
-        Ok(v)
+        value
     }
+}
+
+/// A walk as a person gets it: reversals repaired ([`unpace`]) for the human model.
+fn for_surveyor(p: &Problem, walk: Vec<usize>) -> Vec<usize> {
+    if matches!(p.engine.model(), SurveyorModel::Human { .. }) {
+        unpace(p, &walk)
+    } else {
+        walk
+    }
+}
+
+/// The search score: the surrogate value, penalised per reversal for a person.
+fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
+    Ok(penalised(p, walk, s.value(walk)?))
 }
 
 /// Statistics of a large-building search, for progress messages and the benchmark.
@@ -202,7 +221,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     let built: Vec<(Vec<usize>, f64)> = radii
         .par_iter()
         .map(|&r| {
-            let w = leg(p, &Leg { radius: r, ..base }, &[], None, run);
+            let w = for_surveyor(p, leg(p, &Leg { radius: r, ..base }, &[], None, run));
             let s = score(p, &sur, &w).unwrap_or(f64::NEG_INFINITY);
             (w, s)
         })
@@ -325,23 +344,32 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         None,
         run,
     );
-    let mut finalists = vec![cur, coverage];
+    // For a person the systematic walk competes with its reversals repaired too, and
+    // every finalist is judged by its exact utility penalised per reversal.
+    let mut finalists = vec![cur];
+    if human {
+        finalists.push(unpace(p, &coverage));
+    }
+    finalists.push(coverage);
     if t_exact < run.time_limit().unwrap_or(Duration::MAX) / 10 {
         finalists.push(first);
     }
     let exact: Vec<Result<f64>> = finalists.par_iter().map(|w| p.utility(w)).collect();
-    let mut out: Option<(Vec<usize>, f64)> = None;
+    let mut out: Option<(Vec<usize>, f64, f64)> = None; // walk, utility, penalised
     for (w, u) in finalists.into_iter().zip(exact) {
         let u = u?;
         p.offer(run, &w, u);
+        let s = penalised(p, &w, u);
         if out
             .as_ref()
-            .is_none_or(|(bw, bu)| better((&w, u), (bw, *bu)))
+            .is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs)))
         {
-            out = Some((w, u));
+            out = Some((w, u, s));
         }
     }
-    let (walk, utility) = out.unwrap_or_else(|| (p.shortest_walk(), 0.0));
+    let (walk, utility) = out
+        .map(|(w, u, _)| (w, u))
+        .unwrap_or_else(|| (p.shortest_walk(), 0.0));
     let term = if run.out_of_time() {
         Termination::TimeLimit
     } else {
@@ -398,5 +426,5 @@ fn rebuild(
     let mut out = head.to_vec();
     out.extend_from_slice(&mid[1..]);
     out.extend_from_slice(&tail[1..]);
-    out
+    if human { unpace(p, &out) } else { out }
 }
