@@ -13,6 +13,7 @@
 //!   samples at 0.5 m) becomes about 125 observations when `ell` is 40 m.
 //! * **A coarser vertex set.** `V` is replaced by one vertex per grid cell (per floor),
 //!   the cell doubling from `ell / 4` until at most [`SURROGATE_VERTICES`] remain.
+//!
 //! The utility that `auto` reports, saves and compares is always the exact `f_D` of
 //! SPEC 3: the surrogate only ranks candidates inside the search.
 //!
@@ -29,10 +30,12 @@
 //!    (walking straight back at a vertex that is not a dead end) repaired where the
 //!    budget allows ([`super::coverage::unpace`]), and the score loses 1% per reversal
 //!    left.
-//! 3. **Exact comparison.** The search stops early enough to leave time for the exact
-//!    evaluation of the final candidates (the search's best, the best construction and
-//!    the plain `coverage` walk); the best by exact `f_D` is returned, so `auto` never
-//!    returns less than the systematic walk it is judged against.
+//! 3. **Exact comparison.** The best construction and the plain `coverage` walk are
+//!    evaluated exactly before the search (in parallel; that also measures what one
+//!    exact evaluation costs here), and the search stops early enough to leave the time
+//!    for the exact evaluation of its own walk. The best of them by exact `f_D` is
+//!    returned, so `auto` never returns less than the systematic walk it is judged
+//!    against (for a person: less the 1% per reversal).
 
 use std::time::{Duration, Instant};
 
@@ -234,30 +237,54 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             .fold((Vec::new(), f64::NEG_INFINITY), |a, b| {
                 if b.1 > a.1 { b } else { a }
             });
+    // The finalists other than the search's walk are known now: the best construction
+    // and the systematic walk (for a person also with its reversals repaired). Evaluate
+    // them exactly at once, in parallel: that offers a full-budget walk before the search
+    // starts (what a cancel or a time-out returns) and *measures* what one exact
+    // evaluation costs, so the search leaves the final one exactly the time it needs.
+    let coverage = leg(
+        p,
+        &Leg {
+            any_fit: false,
+            avoid_reversals: false,
+            ..base
+        },
+        &[],
+        None,
+        run,
+    );
+    let mut fixed = vec![cur.clone(), coverage.clone()];
+    if human {
+        fixed.push(unpace(p, &coverage));
+    }
+    let timed: Vec<(Result<f64>, Duration)> = fixed
+        .par_iter()
+        .map(|w| {
+            let t0 = Instant::now();
+            (p.utility(w), t0.elapsed())
+        })
+        .collect();
+    let mut t_exact = Duration::ZERO;
+    let mut fixed_u = Vec::with_capacity(fixed.len());
+    for (w, (u, t)) in fixed.iter().zip(timed) {
+        let u = u?;
+        p.offer(run, w, u);
+        fixed_u.push(u);
+        t_exact = t_exact.max(t);
+    }
     let first = cur.clone();
-    // How long one exact evaluation of a full-budget walk will take, from the time of a
-    // surrogate evaluation scaled by the cube of the matrix sizes (with a margin for the
-    // larger matrix's cache misses): the time the final comparison needs.
-    let t_exact = estimate_exact(p, &sur, &cur);
-    // Exact evaluations during the search, when they are cheap beside the limit (at most
-    // a tenth of it each): the construction at once, then the current walk whenever its
-    // surrogate value has grown by 1%, so that progress and a cancel show exact figures.
+    // Exact evaluations during the search when they are cheap beside the limit (at most a
+    // tenth of it each): the current walk whenever its surrogate value has grown by 1%,
+    // so that progress and a cancel show exact figures.
     let limit = run.time_limit().unwrap_or(Duration::from_secs(3600));
     let exact_offers = t_exact < limit / 10;
-    let mut offered_s = f64::NEG_INFINITY;
-    if exact_offers {
-        let u = p.utility(&cur)?;
-        p.offer(run, &cur, u);
-        offered_s = cur_s;
-    }
+    let mut offered_s = cur_s;
     report(0.1, format!("spread construction, {:.0} m", p.length(&cur)));
 
     // 2. Large-neighbourhood search until the time left is what the final exact
-    //    comparison needs (three walks, in parallel on two threads: two rounds), or a
-    //    bounded number of batches without a time limit.
-    // Two exact evaluations in parallel (the search's best and the coverage walk), with a
-    // margin for a busy machine.
-    let reserve = t_exact.mul_f64(1.5) + Duration::from_millis(60);
+    //    evaluation of the search's walk needs (measured above, with a margin for a busy
+    //    machine), or a bounded number of batches without a time limit.
+    let reserve = t_exact.mul_f64(1.3) + Duration::from_millis(50);
     let stop_at = run.deadline().map(|d| d.checked_sub(reserve).unwrap_or(d));
     let max_batches = if stop_at.is_some() { usize::MAX } else { 400 };
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5ca1_ab1e);
@@ -333,32 +360,16 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         p.offer(run, &cur, u);
         return Ok((Outcome::new(cur, u, Termination::Cancelled), stats));
     }
-    let coverage = leg(
-        p,
-        &Leg {
-            any_fit: false,
-            avoid_reversals: false,
-            ..base
-        },
-        &[],
-        None,
-        run,
-    );
-    // For a person the systematic walk competes with its reversals repaired too, and
-    // every finalist is judged by its exact utility penalised per reversal.
-    let mut finalists = vec![cur];
-    if human {
-        finalists.push(unpace(p, &coverage));
+    // The search's walk is the one finalist not yet evaluated exactly; every finalist is
+    // judged by its exact utility, penalised per reversal for a person.
+    let mut finalists: Vec<(Vec<usize>, f64)> = fixed.into_iter().zip(fixed_u).collect();
+    if cur != first {
+        let u = p.utility(&cur)?;
+        p.offer(run, &cur, u);
+        finalists.push((cur, u));
     }
-    finalists.push(coverage);
-    if t_exact < run.time_limit().unwrap_or(Duration::MAX) / 10 {
-        finalists.push(first);
-    }
-    let exact: Vec<Result<f64>> = finalists.par_iter().map(|w| p.utility(w)).collect();
     let mut out: Option<(Vec<usize>, f64, f64)> = None; // walk, utility, penalised
-    for (w, u) in finalists.into_iter().zip(exact) {
-        let u = u?;
-        p.offer(run, &w, u);
+    for (w, u) in finalists {
         let s = penalised(p, &w, u);
         if out
             .as_ref()
@@ -377,20 +388,6 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     };
     report(1.0, "done".into());
     Ok((Outcome::new(walk, utility, term), stats))
-}
-
-/// Estimated time of one exact evaluation of `walk`: a timed surrogate evaluation scaled
-/// by the cube of the ratio of the matrix sizes, times 2 for the cache misses of the
-/// larger matrix.
-fn estimate_exact(p: &Problem, sur: &Surrogate, walk: &[usize]) -> Duration {
-    let t0 = Instant::now();
-    let _ = sur.value(walk);
-    let ts = t0.elapsed().as_secs_f64();
-    let nd = (p.building.pilot.len() + p.engine.prior_observations().len()) as f64;
-    let samples = p.length(walk) / p.engine.model().spacing() + 1.0;
-    let n_exact = nd + samples + p.building.len() as f64;
-    let n_sur = nd + samples / sur.bin() as f64 + sur.vertices() as f64;
-    Duration::from_secs_f64(ts * (n_exact / n_sur).powi(3) * 2.0)
 }
 
 /// `walk` with its stretch `walk[i..=j]` rebuilt by a randomised spread leg of novelty
