@@ -1,6 +1,6 @@
 //! Cancellation, progress, determinism and request validation.
 
-mod plan_common;
+use crate::plan_common;
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -28,6 +28,7 @@ impl Observer for Count {
 
 #[test]
 fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
+    let _serial = crate::serial();
     let b = instance("area-two.json");
     let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
     req.algorithm = Algorithm::Exact; // hours without a limit
@@ -64,6 +65,7 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
 
 #[test]
 fn every_algorithm_reports_progress() {
+    let _serial = crate::serial();
     let b = grid(3, 3, 2.0, &[]);
     for alg in Algorithm::ALL {
         let obs = Arc::new(Count::default());
@@ -79,6 +81,7 @@ fn every_algorithm_reports_progress() {
 
 #[test]
 fn same_seed_same_result() {
+    let _serial = crate::serial();
     let b = instance("area-one.json");
     for alg in [
         Algorithm::Greedy,
@@ -102,6 +105,7 @@ fn same_seed_same_result() {
 
 #[test]
 fn time_limit_returns_the_best_so_far() {
+    let _serial = crate::serial();
     let b = instance("area-two.json");
     let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
     req.algorithm = Algorithm::Exact;
@@ -117,6 +121,7 @@ fn time_limit_returns_the_best_so_far() {
 
 #[test]
 fn request_validation_errors_name_the_problem() {
+    let _serial = crate::serial();
     let b = instance("area-one.json");
     let ok = PlanRequest::new("r0c0", "r5c4", 40.0, kernel());
     let err = |f: &dyn Fn(&mut PlanRequest)| {
@@ -165,6 +170,7 @@ fn request_validation_errors_name_the_problem() {
 
 #[test]
 fn result_json_has_the_spec_shape() {
+    let _serial = crate::serial();
     let b = instance("area-one.json");
     let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
     req.algorithm = Algorithm::Exact;

@@ -1,6 +1,6 @@
 //! The exact search against plain enumeration, and the Steiner TSP DP against brute force.
 
-mod plan_common;
+use crate::plan_common;
 
 use plan_common::{brute_force, grid, problem};
 use rand::{RngExt, SeedableRng};

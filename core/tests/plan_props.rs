@@ -1,6 +1,6 @@
 //! Every planner returns a real walk from the start to the end within the budget.
 
-mod plan_common;
+use crate::plan_common;
 
 use plan_common::{grid, request};
 use proptest::prelude::*;

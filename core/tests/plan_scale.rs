@@ -1,8 +1,6 @@
 //! Planning at building scale (issue 13): the `coverage` baseline, `auto` on generated
 //! buildings of hundreds of vertices, time limits, memory budgets, progress, reversals.
 
-mod plan_common;
-
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -59,6 +57,7 @@ fn kernel() -> Kernel {
 
 #[test]
 fn coverage_walks_to_the_nearest_unwalked_edge_while_the_way_back_fits() {
+    let _serial = crate::serial();
     // a line v0..v4, 1 m edges, closed walk from v0 with 6 m: v0-v1, v1-v2, v2-v3 fit with
     // the way back (6 m); v3-v4 would need 8 m.
     let b = line(5);
@@ -76,6 +75,7 @@ fn coverage_walks_to_the_nearest_unwalked_edge_while_the_way_back_fits() {
 
 #[test]
 fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
+    let _serial = crate::serial();
     let (b, k) = office();
     let budget = 0.5 * b.total_edge_length();
     let start = b.vertices[0].id.clone();
@@ -105,6 +105,7 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
 
 #[test]
 fn every_algorithm_honours_its_time_limit_on_a_large_building() {
+    let _serial = crate::serial();
     let (b, k) = office();
     let start = b.vertices[0].id.clone();
     let limit = Duration::from_millis(800);
@@ -140,6 +141,7 @@ impl Observer for Last {
 
 #[test]
 fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
+    let _serial = crate::serial();
     let (b, k) = office();
     let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
@@ -172,6 +174,7 @@ fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
 
 #[test]
 fn a_request_beyond_the_memory_budget_is_refused_before_allocating() {
+    let _serial = crate::serial();
     // 6,000 vertices: the dense vertex covariance alone would be 288 MB twice, the
     // shortest-path table 432 MB.
     let b = line(6000);
@@ -197,6 +200,7 @@ fn a_request_beyond_the_memory_budget_is_refused_before_allocating() {
 
 #[test]
 fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
+    let _serial = crate::serial();
     let b = line(5); // 4 m of edges
     let mut req = PlanRequest::new("v0", "v0", 100_000.0, kernel());
     req.algorithm = Algorithm::Genetic;
@@ -210,6 +214,7 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
 
 #[test]
 fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
+    let _serial = crate::serial();
     let (b, k) = office();
     let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();

@@ -3,7 +3,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use std::collections::BTreeMap;
 

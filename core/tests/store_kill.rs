@@ -11,7 +11,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
@@ -33,6 +33,7 @@ enum State {
 
 #[test]
 fn sigkill_during_import_leaves_the_previous_state() {
+    let _serial = crate::serial();
     let dir = tempfile::tempdir().expect("tempdir");
     let db = dir.path().join("kill.db");
     let wal = dir.path().join("kill.db-wal");

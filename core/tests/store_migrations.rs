@@ -9,7 +9,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use std::path::{Path, PathBuf};
 

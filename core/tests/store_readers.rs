@@ -8,7 +8,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};

@@ -4,7 +4,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use serde_json::Value;
 use store_common::{fixtures, shared_instance};
