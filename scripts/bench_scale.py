@@ -32,6 +32,15 @@ def total_length(path):
     return len(d["vertices"]), tot
 
 
+def degrees(path):
+    d = json.load(open(path))
+    deg = {v["id"]: 0 for v in d["vertices"]}
+    for e in d["edges"]:
+        deg[e["a"]] += 1
+        deg[e["b"]] += 1
+    return deg
+
+
 def plan(path, budget, alg, limit, model, seed=1):
     cmd = ["/usr/bin/time", "-f", "%e %M", BIN, "plan", "--building", path, "--start", "f0-c00",
            "--end", "f0-c00", "--budget", f"{budget:.1f}", "--algorithm", alg, "--model", model,
@@ -47,7 +56,9 @@ def plan(path, budget, alg, limit, model, seed=1):
         return out
     d = json.loads(p.stdout)
     walk = d["walk"]
-    rev = sum(1 for i in range(1, len(walk) - 1) if walk[i - 1] == walk[i + 1])
+    # Reversals as the issue counts them: straight back at a vertex that is not a dead end.
+    deg = degrees(path)
+    rev = sum(1 for i in range(1, len(walk) - 1) if walk[i - 1] == walk[i + 1] and deg[walk[i]] > 1)
     out.update(length=d["length_m"], utility=d["utility_nats"], term=d["termination"],
                reversals_per_100m=100.0 * rev / max(d["length_m"], 1e-9))
     return out

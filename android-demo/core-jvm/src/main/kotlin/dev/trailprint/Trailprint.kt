@@ -29,6 +29,12 @@ sealed interface PlanEvent {
     data class Done(val plan: PlanSummary) : PlanEvent
 }
 
+/** A plan being computed: its [events] (collect once) and a [stop] that keeps the best walk. */
+class RunningPlan internal constructor(val events: Flow<PlanEvent>, private val onStop: () -> Unit) {
+    /** Stops the planner; [events] then ends with the best walk found so far. */
+    fun stop() = onStop()
+}
+
 /**
  * The hand-written Kotlin face of Trailprint: suspend functions that run the (blocking)
  * native calls on [io], and planning as a cold [Flow] of [PlanEvent]s whose cancellation
@@ -72,27 +78,39 @@ class Trailprint(
      * plan. Cancelling the collector cancels the native planner: it stops within one of
      * its progress checks and saves its best walk so far (`termination` = `cancelled`).
      */
-    fun plan(request: PlanRequest): Flow<PlanEvent> = callbackFlow {
+    fun plan(request: PlanRequest): Flow<PlanEvent> = startPlan(request).events
+
+    /**
+     * Starts planning [request] and returns at once. [RunningPlan.stop] stops the planner
+     * the way a user's Cancel should: [RunningPlan.events] still ends with [PlanEvent.Done],
+     * carrying the best walk found so far (termination "cancelled"), saved like any plan.
+     * Cancelling the collecting coroutine instead stops the planner and drops the result.
+     */
+    fun startPlan(request: PlanRequest): RunningPlan {
         val job = store.newPlan(request)
-        val listener = object : PlanListener {
-            override fun onProgress(progress: PlanProgress) {
-                trySend(PlanEvent.Progress(progress))
+        val closed = java.util.concurrent.atomic.AtomicBoolean(false)
+        val events = callbackFlow {
+            val listener = object : PlanListener {
+                override fun onProgress(progress: PlanProgress) {
+                    trySend(PlanEvent.Progress(progress))
+                }
+            }
+            launch(io) {
+                try {
+                    val result = job.run(listener)
+                    send(PlanEvent.Done(result))
+                    close()
+                } catch (e: Exception) {
+                    close(e)
+                }
+            }
+            awaitClose {
+                job.cancel()
+                // Safe while run() is still going: the native object lives until that call returns.
+                if (closed.compareAndSet(false, true)) job.close()
             }
         }
-        launch(io) {
-            try {
-                val result = job.run(listener)
-                send(PlanEvent.Done(result))
-                close()
-            } catch (e: Exception) {
-                close(e)
-            }
-        }
-        awaitClose {
-            job.cancel()
-            // Safe while run() is still going: the native object lives until that call returns.
-            job.close()
-        }
+        return RunningPlan(events) { if (!closed.get()) job.cancel() }
     }
 
     /** Starts a survey session on a saved plan. */

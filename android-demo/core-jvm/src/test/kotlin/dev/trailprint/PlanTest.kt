@@ -187,4 +187,30 @@ class PlanTest {
             assertTrue("fits the budget" in failed.error!!, failed.error)
         }
     }
+
+    @Test
+    fun cancellingThePlanModelKeepsTheBestWalkSoFar() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
+            val model = PlanModel(api, this, bid)
+            model.load().join()
+            model.tapVertex("c00")
+            model.tapVertex("c00")
+            model.setBudget(300.0)
+            model.setAlgorithm(PlanAlgorithm.EXACT) // hours without a cancel
+            model.plan()
+            // Cancel once the planner has reported a best walk.
+            withTimeout(60_000) { model.state.first { it.progress?.bestUtilityNats != null } }
+            model.cancel()
+            val done = withTimeout(30_000) { model.state.first { !it.planning } }
+            assertNull(done.error)
+            val r = done.result
+            assertNotNull(r, "the cancelled plan's best walk is the result")
+            assertEquals("cancelled", r.termination)
+            assertEquals("c00", r.walk.first())
+            assertEquals("c00", r.walk.last())
+            assertTrue(r.lengthM <= 300.0 + 1e-9 && r.utilityNats > 0.0, "$r")
+            assertEquals(listOf(r.id), api.plans(bid).map { it.id }, "and it is saved")
+        }
+    }
 }

@@ -69,6 +69,7 @@ class PlanModel(
     private val _state = MutableStateFlow(PlanState())
     val state: StateFlow<PlanState> = _state.asStateFlow()
     private var planJob: Job? = null
+    @Volatile private var runningPlan: RunningPlan? = null
 
     fun load() = scope.launch {
         try {
@@ -110,9 +111,11 @@ class PlanModel(
         if (!s.canPlan) return
         val request = PlanRequest(buildingId, s.start!!, s.end!!, s.budgetMetres, s.surveyor, s.algorithm, seed, timeLimitS)
         _state.update { it.copy(planning = true, progress = null, result = null, error = null) }
+        val running = api.startPlan(request)
+        runningPlan = running
         planJob = scope.launch {
             try {
-                api.plan(request).collect { ev ->
+                running.events.collect { ev ->
                     when (ev) {
                         is PlanEvent.Progress -> _state.update { it.copy(progress = ev.progress) }
                         is PlanEvent.Done -> _state.update { it.copy(result = ev.plan) }
@@ -126,13 +129,17 @@ class PlanModel(
                 throw e
             } finally {
                 _state.update { it.copy(planning = false) }
+                if (runningPlan === running) runningPlan = null
             }
         }
     }
 
-    /** Cancels a running plan (the native planner stops). */
+    /**
+     * Cancels a running plan: the native planner stops and its best walk so far becomes
+     * the result (termination "cancelled"), so the minutes already spent are not lost.
+     */
     fun cancel() {
-        planJob?.cancel()
+        runningPlan?.stop()
     }
 
     fun dismissError() = _state.update { it.copy(error = null) }
