@@ -33,7 +33,7 @@
 //! eight spare rows after the last (a final block of fewer than eight rows is computed as
 //! a whole tile; its spare rows are never stored to nor read from as results).
 
-use super::simd::{Isa, IsaKind};
+use super::simd::Isa;
 
 /// Rows per block (the tile height).
 const MR: usize = 8;
@@ -81,10 +81,10 @@ pub fn factor(isa: Isa, a: &mut [f64], layout: Layout, logdet_from: usize) -> Op
         // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with AVX-512F/DQ/VL and
         // FMA (`Isa::detect`, `Isa::supported`); the buffer bounds were checked above and
         // every access stays within `layout.len()`.
-        IsaKind::Avx512 => unsafe { factor_avx512(a, layout, logdet_from) },
+        super::simd::IsaKind::Avx512 => unsafe { factor_avx512(a, layout, logdet_from) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, for AVX2 and FMA.
-        IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, logdet_from) },
+        super::simd::IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, logdet_from) },
         // SAFETY: bounds checked above; the portable build fuses multiply-adds where the
         // base instruction set has them (aarch64).
         _ => unsafe { factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, logdet_from) },

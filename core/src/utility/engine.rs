@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use super::blocked;
 use super::dense;
 use super::reference::Observation;
-use super::simd::{self, Isa, IsaKind, Points};
+use super::simd::{self, Isa, Points};
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
 use crate::samples::{Sample, SurveyorModel, WalkSampler};
@@ -406,10 +406,10 @@ fn dispatch(isa: Isa, f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> Dispatch
         // SAFETY: an `Isa` of this kind exists only on a CPU with the features
         // (`Isa::detect`, `Isa::supported`).
         #[cfg(target_arch = "x86_64")]
-        IsaKind::Avx512 => unsafe { run_op_avx512(f, ctx, a) },
+        simd::IsaKind::Avx512 => unsafe { run_op_avx512(f, ctx, a) },
         // SAFETY: as above.
         #[cfg(target_arch = "x86_64")]
-        IsaKind::Avx2Fma => unsafe { run_op_avx2(f, ctx, a) },
+        simd::IsaKind::Avx2Fma => unsafe { run_op_avx2(f, ctx, a) },
         _ => run_op::<{ simd::GENERIC_FMA }>(f, ctx, a),
     }
 }
