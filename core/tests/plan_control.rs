@@ -2,7 +2,7 @@
 
 use crate::plan_common;
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -10,18 +10,16 @@ use plan_common::{grid, instance, kernel, request};
 use trailprint::Error;
 use trailprint::plan::{Algorithm, Control, Observer, PlanRequest, Progress, Termination, plan};
 
+/// Records every progress report.
 #[derive(Default)]
-struct Count {
-    calls: AtomicUsize,
-    last: Mutex<Option<Progress>>,
+struct Recorder {
+    reports: Mutex<Vec<Progress>>,
 }
 
-impl Observer for Count {
+impl Observer for Recorder {
     fn progress(&self, p: &Progress) {
-        self.calls.fetch_add(1, Ordering::Relaxed);
-        assert!((0.0..=1.0).contains(&p.fraction));
-        if let Ok(mut l) = self.last.lock() {
-            *l = Some(p.clone());
+        if let Ok(mut r) = self.reports.lock() {
+            r.push(p.clone());
         }
     }
 }
@@ -63,20 +61,72 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     );
 }
 
+/// What a progress bar and a "best so far" label rely on: every report is of the
+/// algorithm asked for, its fraction lies in [0, 1] and never goes back, the best utility
+/// never drops, the best length (when given) fits the budget, and the last report's best
+/// utility is the result's (utilities to SPEC 3's 1e-9). Problems of all algorithms are collected, then reported
+/// together.
 #[test]
-fn every_algorithm_reports_progress() {
+fn every_algorithm_reports_consistent_progress() {
     let _serial = crate::serial();
-    let b = grid(3, 3, 2.0, &[]);
+    let b = grid(4, 3, 2.0, &[]);
+    let budget = 16.0;
+    let mut problems = Vec::new();
     for alg in Algorithm::ALL {
-        let obs = Arc::new(Count::default());
+        let obs = Arc::new(Recorder::default());
         let control = Control::new().with_observer(obs.clone());
-        let req = request(&b, 0, 8, 14.0, alg);
-        plan(b.clone(), &req, &control).expect("plan");
-        assert!(
-            obs.calls.load(Ordering::Relaxed) > 0,
-            "{alg} never reported"
-        );
+        let req = request(&b, 0, 11, budget, alg);
+        let r = plan(b.clone(), &req, &control).expect("plan");
+        let reports = obs.reports.lock().expect("lock").clone();
+        if reports.is_empty() {
+            problems.push(format!("{alg}: never reported"));
+            continue;
+        }
+        let mut last_fraction = 0.0;
+        let mut last_best = f64::NEG_INFINITY;
+        for (i, p) in reports.iter().enumerate() {
+            let at = format!("{alg}, report {i} of {} ({:?})", reports.len(), p.message);
+            if p.algorithm != alg {
+                problems.push(format!("{at}: algorithm {}", p.algorithm));
+            }
+            if !(0.0..=1.0).contains(&p.fraction) {
+                problems.push(format!("{at}: fraction {}", p.fraction));
+            }
+            if p.fraction < last_fraction {
+                problems.push(format!(
+                    "{at}: fraction went back from {last_fraction} to {}",
+                    p.fraction
+                ));
+            }
+            last_fraction = last_fraction.max(p.fraction);
+            if let Some(u) = p.best_utility {
+                // Utilities of one walk by different evaluators agree to 1e-9 (SPEC 3).
+                if u < last_best - 1e-9 * last_best.abs().max(1.0) {
+                    problems.push(format!(
+                        "{at}: best utility dropped from {last_best} to {u}"
+                    ));
+                }
+                last_best = last_best.max(u);
+            }
+            if let Some(l) = p.best_length
+                && l > budget + 1e-9
+            {
+                problems.push(format!(
+                    "{at}: best length {l} m over the {budget} m budget"
+                ));
+            }
+        }
+        let final_best = reports.iter().rev().find_map(|p| p.best_utility);
+        if !final_best
+            .is_some_and(|f| (f - r.utility_nats).abs() <= 1e-9 * r.utility_nats.abs().max(1.0))
+        {
+            problems.push(format!(
+                "{alg}: last reported best {final_best:?}, result {} nats",
+                r.utility_nats
+            ));
+        }
     }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
 #[test]

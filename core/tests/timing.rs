@@ -10,6 +10,7 @@ mod store_common;
 
 mod plan_control;
 mod plan_scale;
+mod planners;
 mod session_kill;
 mod store_kill;
 

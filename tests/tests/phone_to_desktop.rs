@@ -135,5 +135,20 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
     // The walk planned with the prior adds at least as much on top of the collected data
     // as the walk planned without it.
     assert!(gain(&informed.walk_indices) >= gain(&fresh.walk_indices) - 1e-9);
-    assert!(engine.utility(&fresh.walk_indices).expect("u") > 0.0);
+    let fresh_worth = engine.utility(&fresh.walk_indices).expect("u");
+    assert!(fresh_worth > 0.0);
+    // The next plan is worth less: what the informed walk adds on top of the collected
+    // data is less than the fresh walk was worth without it, and the planners' own reports
+    // say the same.
+    let informed_worth = gain(&informed.walk_indices);
+    assert!(
+        informed_worth < fresh_worth,
+        "informed walk adds {informed_worth} nats, fresh walk was worth {fresh_worth}"
+    );
+    assert!(
+        informed.utility_nats < fresh.utility_nats,
+        "reported: informed {} vs fresh {} nats",
+        informed.utility_nats,
+        fresh.utility_nats
+    );
 }

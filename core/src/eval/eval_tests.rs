@@ -108,7 +108,15 @@ fn all_dense_positions_localize_well_on_area_two() {
     assert_eq!(r.access_points, 18);
     // The synthetic instance is easier than the real area (about 3 dB of residual per
     // access point against 1.8 dB/m of gradient, 18 access points): 0.56 m with seed 1.
-    assert!(r.mean_error_m < 1.5, "mean error {} m", r.mean_error_m);
+    // The evaluation is deterministic given the seed; the margin allows a few of the 131
+    // test points to flip between near-tied grid points under other floating-point
+    // rounding (each flip moves the mean by a few millimetres), not a worse map.
+    assert!(r.mean_error_m < 0.65, "mean error {} m", r.mean_error_m);
+    assert!(
+        half.mean_error_m < 0.7,
+        "half the positions: {} m",
+        half.mean_error_m
+    );
     assert!(r.median_error_m <= r.p90_error_m);
 }
 
@@ -123,8 +131,8 @@ fn all_dense_positions_localize_well_on_area_one() {
         r.samples, r.mean_error_m, r.median_error_m, r.p90_error_m
     );
     assert_eq!(r.errors_m.len(), 58);
-    // 0.71 m with seed 1 on the synthetic instance.
-    assert!(r.mean_error_m < 2.0, "mean error {} m", r.mean_error_m);
+    // 0.71 m with seed 1 on the synthetic instance (58 test points; margin as on Area Two).
+    assert!(r.mean_error_m < 0.8, "mean error {} m", r.mean_error_m);
 }
 
 /// A walk that visits every vertex: a depth-first tour from vertex 0, walking back along
@@ -232,6 +240,7 @@ fn synthetic_world_model_works_without_a_dense_survey() {
     assert_eq!(ev.access_points().len(), 10);
     let samples: Vec<Point> = s.file.dense_survey.iter().map(Fingerprint::point).collect();
     let r = ev.evaluate(&samples, 1).expect("evaluate");
+    eprintln!("synthetic world model: mean {:.2} m", r.mean_error_m);
     assert!(r.mean_error_m < 4.0, "{}", r.mean_error_m);
 }
 
@@ -306,6 +315,10 @@ fn both_localizers_locate_a_dense_walk_on_area_two() {
         .expect("knn");
     assert_eq!(gp, ev.evaluate(&pts, 1).expect("default"));
     assert_eq!(knn.errors_m.len(), b.test_points.len());
+    eprintln!(
+        "area-two dense walk: gp {:.2} m, knn {:.2} m",
+        gp.mean_error_m, knn.mean_error_m
+    );
     // Both are metre-level on a dense map of a 63 m corridor; they are different methods.
     assert!(
         gp.mean_error_m < 6.0 && knn.mean_error_m < 6.0,

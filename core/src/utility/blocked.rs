@@ -290,7 +290,7 @@ pub fn syrk_upper_sub<const FMA: bool>(s: &mut [f64], n: usize, r: &[f64], rows:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::utility::simd::{Isa, on_isa};
+    use crate::utility::simd::{on_variant, test_variants};
 
     fn spd(n: usize) -> Vec<f64> {
         let mut a = vec![0.0; n * n];
@@ -305,15 +305,18 @@ mod tests {
 
     #[test]
     fn blocked_cholesky_matches_nalgebra_for_awkward_sizes() {
-        println!("blocked kernels tested on: {:?}", Isa::supported());
+        println!(
+            "blocked kernels tested on (isa, fma): {:?}",
+            test_variants()
+        );
         for n in [1, 2, 7, 8, 9, 17, 40] {
             let a = spd(n);
             let m = nalgebra::DMatrix::from_row_slice(n, n, &a);
             let chol = m.clone().cholesky().expect("pd");
             let l = chol.l();
-            for isa in Isa::supported() {
+            for isa in test_variants() {
                 let mut u = a.clone();
-                let ld = on_isa(
+                let ld = on_variant(
                     isa,
                     &mut u,
                     |u| cholesky_upper::<false>(u, n),
@@ -336,7 +339,7 @@ mod tests {
                 let w = 3;
                 let b: Vec<f64> = (0..n * w).map(|i| (i as f64 * 0.3).sin()).collect();
                 let mut x = b.clone();
-                on_isa(
+                on_variant(
                     isa,
                     &mut x,
                     |x| solve_upper_transposed::<false>(&u, n, x, w),
@@ -358,9 +361,9 @@ mod tests {
         let n = 11;
         let rows = 13;
         let r: Vec<f64> = (0..rows * n).map(|i| (i as f64 * 0.7).cos()).collect();
-        for isa in Isa::supported() {
+        for isa in test_variants() {
             let mut s = vec![0.0; n * n];
-            on_isa(
+            on_variant(
                 isa,
                 &mut s,
                 |s| syrk_upper_sub::<false>(s, n, &r, rows),
@@ -377,9 +380,9 @@ mod tests {
 
     #[test]
     fn not_positive_definite_is_reported() {
-        for isa in Isa::supported() {
+        for isa in test_variants() {
             let mut a = vec![1.0, 2.0, 2.0, 1.0];
-            let r = on_isa(
+            let r = on_variant(
                 isa,
                 &mut a,
                 |a| cholesky_upper::<false>(a, 2),

@@ -76,16 +76,18 @@ pub fn factor(isa: Isa, a: &mut [f64], layout: Layout, logdet_from: usize) -> Op
         layout.ld >= layout.n + 16 && layout.ld.is_multiple_of(8),
         "bad leading dimension"
     );
-    match isa {
+    match isa.kind() {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Isa::Avx512` is only detected on CPUs with AVX-512F; the buffer
-        // bounds were checked above and every access stays within `layout.len()`.
-        Isa::Avx512 => unsafe { factor_avx512(a, layout, logdet_from) },
+        // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with AVX-512F/DQ/VL and
+        // FMA (`Isa::detect`, `Isa::supported`); the buffer bounds were checked above and
+        // every access stays within `layout.len()`.
+        super::simd::IsaKind::Avx512 => unsafe { factor_avx512(a, layout, logdet_from) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, for AVX2 and FMA.
-        Isa::Avx2Fma => unsafe { factor_avx2(a, layout, logdet_from) },
-        // SAFETY: bounds checked above.
-        _ => unsafe { factor_with::<Plain<false>>(a, layout, logdet_from) },
+        super::simd::IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, logdet_from) },
+        // SAFETY: bounds checked above; the portable build fuses multiply-adds where the
+        // base instruction set has them (aarch64).
+        _ => unsafe { factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, logdet_from) },
     }
 }
 
@@ -504,34 +506,43 @@ mod tests {
     }
 
     #[test]
-    fn portable_factor_matches_nalgebra() {
-        check(Isa::Generic);
+    fn factor_matches_nalgebra_on_every_isa() {
+        println!("dense factor tested on: {:?}", Isa::supported());
+        for isa in Isa::supported() {
+            check(isa);
+        }
     }
 
+    /// The portable driver with the other `FMA` than this target's `Generic` uses: on
+    /// x86-64 the fused build aarch64 runs (`mul_add` is a libm call here, slow but exact).
     #[test]
-    fn detected_isa_factor_matches_nalgebra() {
-        check(Isa::detect());
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn avx2_factor_matches_nalgebra_where_the_cpu_has_it() {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            check(Isa::Avx2Fma);
+    fn portable_factor_with_the_other_fma_matches_nalgebra() {
+        const OTHER: bool = !super::super::simd::GENERIC_FMA;
+        for n in [1usize, 7, 8, 9, 17, 40, 71] {
+            for from in [0, n / 3, n - 1] {
+                let (mut a, m, layout) = spd(n);
+                // SAFETY: `a` holds `layout.len()` elements; the portable lanes need no
+                // CPU feature.
+                let got = unsafe { factor_with::<Plain<OTHER>>(&mut a, layout, from) }.expect("pd");
+                let want = schur_logdet(&m, from);
+                assert!(
+                    (got - want).abs() <= 1e-10 * want.abs().max(1.0),
+                    "n={n} from={from}"
+                );
+            }
         }
     }
 
     #[test]
     fn indefinite_matrix_is_reported_for_every_isa() {
-        for isa in [Isa::Generic, Isa::detect()] {
+        for isa in Isa::supported() {
             let layout = Layout::new(3);
             let mut a = vec![0.0; layout.len()];
             a[0] = 1.0;
             a[1] = 2.0;
             a[layout.ld + 1] = 1.0;
             a[2 * layout.ld + 2] = 1.0;
-            assert!(factor(isa, &mut a, layout, 0).is_none());
+            assert!(factor(isa, &mut a, layout, 0).is_none(), "{isa:?}");
         }
     }
 }

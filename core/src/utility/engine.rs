@@ -399,14 +399,18 @@ fn run_op_avx2(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
 }
 
 /// Runs an operation with the kernels compiled for `isa`.
+/// The portable build fuses multiply-adds where the base instruction set has them
+/// (aarch64, [`simd::GENERIC_FMA`]).
 fn dispatch(isa: Isa, f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> DispatchOut {
-    match isa {
-        // SAFETY: `Isa::detect` returns these variants only when the CPU has the features.
+    match isa.kind() {
+        // SAFETY: an `Isa` of this kind exists only on a CPU with the features
+        // (`Isa::detect`, `Isa::supported`).
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx512 => unsafe { run_op_avx512(f, ctx, a) },
+        simd::IsaKind::Avx512 => unsafe { run_op_avx512(f, ctx, a) },
+        // SAFETY: as above.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2Fma => unsafe { run_op_avx2(f, ctx, a) },
-        _ => run_op::<false>(f, ctx, a),
+        simd::IsaKind::Avx2Fma => unsafe { run_op_avx2(f, ctx, a) },
+        _ => run_op::<{ simd::GENERIC_FMA }>(f, ctx, a),
     }
 }
 
@@ -441,7 +445,7 @@ impl UtilityEngine {
         prior: &[Observation],
     ) -> Result<Self> {
         let all: Vec<usize> = (0..building.len()).collect();
-        Self::build(building, kernel, model, prior, &all)
+        Self::build(building, kernel, model, prior, &all, Isa::detect())
     }
 
     /// An engine whose `V` is the subset `vertices` of the building's vertices (indices):
@@ -460,7 +464,7 @@ impl UtilityEngine {
                 "vertex index {v} out of range"
             )));
         }
-        Self::build(building, kernel, model, prior, vertices)
+        Self::build(building, kernel, model, prior, vertices, Isa::detect())
     }
 
     fn build(
@@ -469,6 +473,7 @@ impl UtilityEngine {
         model: SurveyorModel,
         prior: &[Observation],
         subset: &[usize],
+        isa: Isa,
     ) -> Result<Self> {
         kernel.validate("kernel")?;
         model.validate()?;
@@ -477,7 +482,6 @@ impl UtilityEngine {
             vertices.push(&building.vertices[v].pos);
         }
         let nv = vertices.len();
-        let isa = Isa::detect();
         let ctx = Ctx {
             sf2: kernel.sf2,
             inv_ell: 1.0 / kernel.ell,
@@ -749,5 +753,75 @@ impl<'e> WalkState<'e> {
     /// The engine this walk belongs to.
     pub fn engine(&self) -> &'e UtilityEngine {
         self.engine
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::utility::reference::{pilot_observations, reference_utility};
+
+    /// The whole engine (dense walk path, incremental pushes, prior utility) agrees with
+    /// SPEC 3's formula on every instruction set this CPU runs, not only the detected
+    /// one: so the portable build a phone or an older laptop uses is tested here too.
+    #[test]
+    fn engine_matches_reference_on_every_isa() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/area-one.json");
+        let b = Arc::new(Building::load(&path).expect("fixture"));
+        let kernel = Kernel::new(62.58, 7.93, 4.22);
+        let model = SurveyorModel::robot();
+        // Out along unvisited neighbours for eight edges from r0c0, and back the same way.
+        let walk: Vec<usize> = {
+            let mut out = vec![b.vertex_index("r0c0").expect("r0c0")];
+            for _ in 0..8 {
+                let v = *out.last().expect("non-empty");
+                match b.neighbours(v).iter().find(|(w, _)| !out.contains(w)) {
+                    Some(&(w, _)) => out.push(w),
+                    None => break,
+                }
+            }
+            let back: Vec<usize> = out.iter().rev().skip(1).copied().collect();
+            out.extend(back);
+            out
+        };
+        assert!(walk.len() >= 9, "{walk:?}");
+        let mut obs = pilot_observations(&b.pilot_points());
+        for s in crate::samples::sample_walk(&b, &walk, &model, &kernel).expect("samples") {
+            obs.push(Observation {
+                pos: s.pos,
+                extra_noise: s.extra_noise,
+            });
+        }
+        let want = reference_utility(&kernel, &b.vertex_points(), &obs).expect("reference");
+        let all: Vec<usize> = (0..b.len()).collect();
+        println!("engine tested on: {:?}", Isa::supported());
+        for isa in Isa::supported() {
+            let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
+            assert_eq!(e.isa(), isa);
+            let dense = e.utility(&walk).expect("dense");
+            let mut st = e.start(walk[0]).expect("start");
+            for &v in &walk[1..] {
+                st.push(v).expect("push");
+            }
+            let inc = st.utility().expect("incremental");
+            for (what, got) in [("dense", dense), ("incremental", inc)] {
+                assert!(
+                    (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+                    "{isa:?} {what}: {got} vs {want}"
+                );
+            }
+            let prior = e.prior_utility().expect("prior");
+            let pw = reference_utility(
+                &kernel,
+                &b.vertex_points(),
+                &pilot_observations(&b.pilot_points()),
+            )
+            .expect("reference");
+            assert!(
+                (prior - pw).abs() <= 1e-9 * pw.abs().max(1.0),
+                "{isa:?} prior"
+            );
+        }
     }
 }

@@ -1,6 +1,8 @@
 //! The few numeric kernels the utility engine spends its time in, written so that LLVM
-//! vectorises them, and compiled three times: AVX-512, AVX2+FMA and baseline x86-64 (or
-//! whatever the target is). [`Isa::detect`] picks one at run time, once per engine.
+//! vectorises them, and compiled three times on x86-64: AVX-512, AVX2+FMA and baseline
+//! x86-64 (SSE2). On aarch64 there is one build, the portable loops vectorised with NEON
+//! and using fused multiply-add, both part of that architecture's base instruction set
+//! ([`GENERIC_FMA`]). [`Isa::detect`] picks one at run time, once per engine.
 //!
 //! Why not nalgebra here: the engine grows a Cholesky factor one row at a time (each walk
 //! extension appends its samples), which is a sequence of short dot products and axpys on
@@ -9,48 +11,126 @@
 //! below are plain loops over fixed-width chunks; `mul_add` is used only under a
 //! `target_feature` that makes it a single FMA instruction.
 
-/// The instruction set a computation is dispatched to.
+/// Whether the portable kernels ([`Isa::generic`]) fuse their multiply-adds.
+///
+/// On aarch64 (the phone's architecture) fused multiply-add is part of the base
+/// instruction set: `f64::mul_add` compiles to one `fmadd`, and the loops LLVM vectorises
+/// with NEON (also baseline there, 128-bit) use `fmla`. On x86-64 it is not: without a
+/// `target_feature` `mul_add` is a call into libm, so the baseline path stays unfused and
+/// FMA is used only by the [`IsaKind::Avx2Fma`] and [`IsaKind::Avx512`] builds.
+pub const GENERIC_FMA: bool = cfg!(target_arch = "aarch64");
+
+/// Which instruction set an [`Isa`] is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Isa {
+pub enum IsaKind {
+    /// x86-64 with AVX-512 F, DQ and VL, and FMA.
     Avx512,
+    /// x86-64 with AVX2 and FMA.
     Avx2Fma,
+    /// The portable loops compiled for the target's baseline: SSE2 on x86-64, NEON with
+    /// fused multiply-add on aarch64 (see [`GENERIC_FMA`]).
     Generic,
+}
+
+/// An instruction set the running CPU has been checked to support: the only way to pick
+/// the kernels the engine dispatches to.
+///
+/// Its field is private, so an `Isa` comes only from [`Isa::detect`], [`Isa::supported`]
+/// (which ask the CPU) or [`Isa::generic`] (the portable code every CPU runs). That is
+/// what makes the safe functions taking one ([`dot_isa`], [`gemv_sub_isa`],
+/// [`kernel_row_isa`], [`super::dense::factor`]) sound: safe code cannot hand them an
+/// AVX-512 value on a CPU without AVX-512.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Isa(IsaKind);
+
+impl std::fmt::Debug for Isa {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:?}", self.0)
+    }
+}
+
+/// The CPU features the dispatch depends on.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct Features {
+    avx512f: bool,
+    avx512dq: bool,
+    avx512vl: bool,
+    avx2: bool,
+    fma: bool,
+}
+
+impl Features {
+    /// What this CPU has.
+    fn probe() -> Features {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            Features {
+                avx512f: has!("avx512f"),
+                avx512dq: has!("avx512dq"),
+                avx512vl: has!("avx512vl"),
+                avx2: has!("avx2"),
+                fma: has!("fma"),
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        Features::default()
+    }
+
+    /// The instruction sets these features allow, best first, always ending in
+    /// `Generic`. Each requires everything its `#[target_feature(enable = ...)]` lists:
+    /// `avx512f,avx512dq,avx512vl,fma` (LLVM may use VL's 128/256-bit EVEX forms anywhere
+    /// in such a function) and `avx2,fma`.
+    fn allowed(self) -> Vec<IsaKind> {
+        let mut out = Vec::with_capacity(3);
+        if cfg!(target_arch = "x86_64") {
+            if self.avx512f && self.avx512dq && self.avx512vl && self.avx2 && self.fma {
+                out.push(IsaKind::Avx512);
+            }
+            if self.avx2 && self.fma {
+                out.push(IsaKind::Avx2Fma);
+            }
+        }
+        out.push(IsaKind::Generic);
+        out
+    }
 }
 
 impl Isa {
     /// The best instruction set this CPU supports.
     pub fn detect() -> Isa {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Isa::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Isa::Avx2Fma;
-            }
-        }
-        Isa::Generic
+        Isa(Features::probe().allowed()[0])
     }
 
     /// Every instruction set this CPU can run, best first: what the tests cover, so that
     /// a machine without AVX-512 still tests its AVX2+FMA path and one with it tests all.
     pub fn supported() -> Vec<Isa> {
-        match Isa::detect() {
-            Isa::Avx512 => vec![Isa::Avx512, Isa::Avx2Fma, Isa::Generic],
-            Isa::Avx2Fma => vec![Isa::Avx2Fma, Isa::Generic],
-            Isa::Generic => vec![Isa::Generic],
+        Features::probe().allowed().into_iter().map(Isa).collect()
+    }
+
+    /// The portable kernels, which run on every CPU of the target architecture.
+    pub fn generic() -> Isa {
+        Isa(IsaKind::Generic)
+    }
+
+    /// Which instruction set this is.
+    pub fn kind(self) -> IsaKind {
+        self.0
+    }
+
+    /// Whether this instruction set's kernels fuse multiply-adds (the `FMA` parameter
+    /// of the generic kernels it runs).
+    pub fn fma(self) -> bool {
+        match self.0 {
+            IsaKind::Avx512 | IsaKind::Avx2Fma => true,
+            IsaKind::Generic => GENERIC_FMA,
         }
     }
 }
 
-/// Test support: runs `plain` (the `FMA = false` kernels) for [`Isa::Generic`], or `fused`
-/// (`FMA = true`) on `arg` inside a function compiled for `isa`, as the engine's dispatch does.
-/// `isa` must come from [`Isa::supported`].
+/// Test support: runs `plain` (the `FMA = false` kernels) or `fused` (`FMA = true`) on
+/// `arg` inside a function compiled for `isa`, with the `FMA` the engine's dispatch uses
+/// for it ([`Isa::fma`]).
 #[cfg(test)]
 pub(crate) fn on_isa<T, R>(
     isa: Isa,
@@ -68,20 +148,41 @@ pub(crate) fn on_isa<T, R>(
         fn avx2<T, R>(f: impl FnOnce(T) -> R, arg: T) -> R {
             f(arg)
         }
-        assert!(
-            Isa::supported().contains(&isa),
-            "{isa:?} is not supported here"
-        );
-        match isa {
-            // SAFETY: checked above that the CPU supports `isa`.
-            Isa::Avx512 => return unsafe { avx512(fused, arg) },
+        match isa.kind() {
+            // SAFETY: an `Isa` of this kind exists only on a CPU with these features.
+            IsaKind::Avx512 => return unsafe { avx512(fused, arg) },
             // SAFETY: as above.
-            Isa::Avx2Fma => return unsafe { avx2(fused, arg) },
-            Isa::Generic => {}
+            IsaKind::Avx2Fma => return unsafe { avx2(fused, arg) },
+            IsaKind::Generic => {}
         }
     }
-    let _ = fused;
-    plain(arg)
+    if isa.fma() { fused(arg) } else { plain(arg) }
+}
+
+/// Test support: every way the kernels are run on this machine, as `(isa, fma)`: each
+/// supported instruction set with its own `FMA`, plus the portable code with the other
+/// `FMA` than this target's (on x86-64, the fused portable path aarch64's `Generic` runs;
+/// `mul_add` is then a libm call, slow but exact), so that path is tested here too.
+#[cfg(test)]
+pub(crate) fn test_variants() -> Vec<(Isa, bool)> {
+    let mut v: Vec<(Isa, bool)> = Isa::supported().into_iter().map(|i| (i, i.fma())).collect();
+    v.push((Isa::generic(), !GENERIC_FMA));
+    v
+}
+
+/// Test support: [`on_isa`] for one of [`test_variants`].
+#[cfg(test)]
+pub(crate) fn on_variant<T, R>(
+    (isa, fma): (Isa, bool),
+    arg: T,
+    plain: impl FnOnce(T) -> R,
+    fused: impl FnOnce(T) -> R,
+) -> R {
+    if isa.kind() == IsaKind::Generic {
+        if fma { fused(arg) } else { plain(arg) }
+    } else {
+        on_isa(isa, arg, plain, fused)
+    }
 }
 
 #[inline(always)]
@@ -143,8 +244,9 @@ pub fn dot<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
 #[inline(always)]
 pub fn dot_isa<const FMA: bool>(isa: Isa, a: &[f64], b: &[f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
-    if isa == Isa::Avx512 {
-        // SAFETY: `Isa::Avx512` is only detected on CPUs with AVX-512F.
+    if isa.kind() == IsaKind::Avx512 {
+        // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with AVX-512F/DQ/VL and
+        // FMA (`Isa::detect`, `Isa::supported`).
         return unsafe { dot_avx512(a, b) };
     }
     let _ = isa;
@@ -154,7 +256,7 @@ pub fn dot_isa<const FMA: bool>(isa: Isa, a: &[f64], b: &[f64]) -> f64 {
 /// `sum a[i] * b[i]` with AVX-512: two zmm accumulators, a masked tail.
 ///
 /// # Safety
-/// The CPU must support AVX-512F.
+/// The CPU must support AVX-512F/DQ/VL and FMA.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
@@ -205,8 +307,9 @@ pub fn gemv_sub_isa<const FMA: bool>(isa: Isa, x: &[f64], m: &[f64], ld: usize, 
         "gemv_sub: matrix too small"
     );
     #[cfg(target_arch = "x86_64")]
-    if isa == Isa::Avx512 {
-        // SAFETY: `Isa::Avx512` is only detected on CPUs with AVX-512F; sizes checked.
+    if isa.kind() == IsaKind::Avx512 {
+        // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with AVX-512F/DQ/VL and
+        // FMA; sizes checked above.
         unsafe { gemv_sub_avx512(x, m, ld, y) };
         return;
     }
@@ -219,7 +322,7 @@ pub fn gemv_sub_isa<const FMA: bool>(isa: Isa, x: &[f64], m: &[f64], ld: usize, 
 /// The AVX-512 body of [`gemv_sub_isa`].
 ///
 /// # Safety
-/// AVX-512F; `m` holds `x.len()` rows of stride `ld >= y.len()`.
+/// AVX-512F/DQ/VL and FMA; `m` holds `x.len()` rows of stride `ld >= y.len()`.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
@@ -401,8 +504,8 @@ pub fn kernel_row_isa<const FMA: bool>(
     out: &mut [f64],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if isa == Isa::Avx512 {
-        // SAFETY: `Isa::Avx512` is only detected on CPUs with these features.
+    if isa.kind() == IsaKind::Avx512 {
+        // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with these features.
         unsafe { kernel_row_avx512(sf2, inv_ell, p, q, from, out) };
         return;
     }
@@ -551,8 +654,43 @@ mod tests {
     fn supported_lists_the_detected_isa_first_and_always_generic() {
         let all = Isa::supported();
         println!("instruction sets tested on this CPU: {all:?}");
+        println!("kernel variants tested (isa, fma): {:?}", test_variants());
         assert_eq!(all[0], Isa::detect());
-        assert_eq!(all.last(), Some(&Isa::Generic));
+        assert_eq!(all.last(), Some(&Isa::generic()));
+        assert_eq!(Isa::generic().fma(), cfg!(target_arch = "aarch64"));
+    }
+
+    /// Every feature an AVX-512 function enables is required before `Avx512` is chosen:
+    /// a CPU with AVX-512F and DQ but not VL (LLVM may emit VL's EVEX-encoded 128/256-bit
+    /// forms in those functions) gets the AVX2 build.
+    #[test]
+    fn avx512_needs_f_dq_vl_and_fma() {
+        let all = Features {
+            avx512f: true,
+            avx512dq: true,
+            avx512vl: true,
+            avx2: true,
+            fma: true,
+        };
+        let kinds = |f: Features| f.allowed();
+        if cfg!(target_arch = "x86_64") {
+            use IsaKind::*;
+            assert_eq!(kinds(all), vec![Avx512, Avx2Fma, Generic]);
+            for missing in 0..3 {
+                let mut f = all;
+                match missing {
+                    0 => f.avx512f = false,
+                    1 => f.avx512dq = false,
+                    _ => f.avx512vl = false,
+                }
+                assert_eq!(kinds(f), vec![Avx2Fma, Generic], "{f:?}");
+            }
+            assert_eq!(kinds(Features { fma: false, ..all }), vec![Generic]);
+            assert_eq!(kinds(Features { avx2: false, ..all }), vec![Generic]);
+            assert_eq!(kinds(Features::default()), vec![Generic]);
+        } else {
+            assert_eq!(kinds(all), vec![IsaKind::Generic]);
+        }
     }
 
     #[test]
@@ -574,10 +712,11 @@ mod tests {
             ((400.0, 0.0, 0.0), 11),
         ] {
             for len in [0, 1, 7, 8, 9, 64, 197] {
-                for isa in Isa::supported() {
+                for v in test_variants() {
+                    let isa = v.0;
                     let mut got = vec![-1.0; len + 3];
-                    on_isa(
-                        isa,
+                    on_variant(
+                        v,
                         &mut got[..len],
                         |o| kernel_row_isa::<false>(isa, sf2, 1.0 / ell, p, &q, from, o),
                         |o| kernel_row_isa::<true>(isa, sf2, 1.0 / ell, p, &q, from, o),
@@ -593,7 +732,7 @@ mod tests {
                         };
                         // exp amplifies a relative error in its argument by |x|.
                         let tol = 8.0 * f64::EPSILON * (1.0 + d / ell) * want;
-                        assert!((g - want).abs() <= tol, "{isa:?} j={j}: {g} vs {want}");
+                        assert!((g - want).abs() <= tol, "{v:?} j={j}: {g} vs {want}");
                     }
                     assert!(
                         got[count..].iter().all(|&x| x == -1.0),
@@ -608,10 +747,10 @@ mod tests {
     /// (about 4.5 ulp of 2^-52) against `f64::exp` on [-700, 0], with and without FMA.
     #[test]
     fn exp_matches_std_to_a_few_ulp() {
-        for isa in Isa::supported() {
+        for v in test_variants() {
             let xs: Vec<f64> = (0..200_000).map(|i| -(i as f64) * 0.0035).collect();
-            let got: Vec<f64> = on_isa(
-                isa,
+            let got: Vec<f64> = on_variant(
+                v,
                 &xs,
                 |xs| xs.iter().map(|&x| exp_nonpos::<false>(x)).collect(),
                 |xs| xs.iter().map(|&x| exp_nonpos::<true>(x)).collect(),
@@ -620,9 +759,9 @@ mod tests {
             for (&x, &g) in xs.iter().zip(&got) {
                 worst = worst.max((g - x.exp()).abs() / x.exp());
             }
-            println!("exp_nonpos on {isa:?}: worst relative error {worst:e}");
-            assert!(worst < 1e-15, "{isa:?}: worst relative error {worst}");
-            assert_eq!(got[0], 1.0, "{isa:?}: exp(0)");
+            println!("exp_nonpos on {v:?}: worst relative error {worst:e}");
+            assert!(worst < 1e-15, "{v:?}: worst relative error {worst}");
+            assert_eq!(got[0], 1.0, "{v:?}: exp(0)");
         }
     }
 
@@ -632,14 +771,15 @@ mod tests {
             let a: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
             let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos()).collect();
             let naive: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
-            for isa in Isa::supported() {
-                let got = on_isa(
-                    isa,
+            for v in test_variants() {
+                let isa = v.0;
+                let got = on_variant(
+                    v,
                     (),
                     |_| dot_isa::<false>(isa, &a, &b),
                     |_| dot_isa::<true>(isa, &a, &b),
                 );
-                assert!((got - naive).abs() < 1e-12, "{isa:?} n={n}");
+                assert!((got - naive).abs() < 1e-12, "{v:?} n={n}");
             }
         }
     }
@@ -655,10 +795,11 @@ mod tests {
                 let want: Vec<f64> = (0..w)
                     .map(|c| y0[c] - (0..rows).map(|j| x[j] * m[j * ld + c]).sum::<f64>())
                     .collect();
-                for isa in Isa::supported() {
+                for v in test_variants() {
+                    let isa = v.0;
                     let mut y = y0.clone();
-                    on_isa(
-                        isa,
+                    on_variant(
+                        v,
                         &mut y,
                         |y| gemv_sub_isa::<false>(isa, &x, &m, ld, y),
                         |y| gemv_sub_isa::<true>(isa, &x, &m, ld, y),
@@ -666,7 +807,7 @@ mod tests {
                     for c in 0..w {
                         assert!(
                             (y[c] - want[c]).abs() < 1e-12,
-                            "{isa:?} w={w} rows={rows} c={c}"
+                            "{v:?} w={w} rows={rows} c={c}"
                         );
                     }
                 }
@@ -680,12 +821,12 @@ mod tests {
             let a: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
             let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.11).cos()).collect();
             let naive: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
-            for isa in Isa::supported() {
-                let d = on_isa(isa, (), |_| dot::<false>(&a, &b), |_| dot::<true>(&a, &b));
-                assert!((d - naive).abs() < 1e-12, "{isa:?} n={n}");
+            for v in test_variants() {
+                let d = on_variant(v, (), |_| dot::<false>(&a, &b), |_| dot::<true>(&a, &b));
+                assert!((d - naive).abs() < 1e-12, "{v:?} n={n}");
                 let mut y = b.clone();
-                on_isa(
-                    isa,
+                on_variant(
+                    v,
                     &mut y,
                     |y| axpy::<false>(2.0, &a, y),
                     |y| axpy::<true>(2.0, &a, y),
@@ -693,7 +834,7 @@ mod tests {
                 for i in 0..n {
                     assert!(
                         (y[i] - (b[i] + 2.0 * a[i])).abs() < 1e-15,
-                        "{isa:?} n={n} i={i}"
+                        "{v:?} n={n} i={i}"
                     );
                 }
             }

@@ -1,0 +1,368 @@
+//! Unit-level behaviour of the planners a user relies on, beyond "returns a feasible walk":
+//! the paper's greedy stopping rule, the genetic operators, `auto` against its own greedy
+//! stage, cancellation and time limits for every algorithm, and feasibility with exact
+//! reported utilities on random graphs of 30 to 60 vertices.
+
+use crate::plan_common;
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use plan_common::{grid, instance, kernel, problem, request};
+use proptest::prelude::*;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use trailprint::Building;
+use trailprint::plan::genetic::{Genetic, crossover, mutate, random_walk};
+use trailprint::plan::greedy::Greedy;
+use trailprint::plan::local_search::LocalSearch;
+use trailprint::plan::{
+    Algorithm, Control, Params, PlanRequest, PlanResult, Problem, Run, Solver, Termination, plan,
+};
+use trailprint::samples::SurveyorModel;
+use trailprint::utility::UtilityEngine;
+
+/// Checks what every plan promises: a real walk from the start to the end within the
+/// budget, whose reported length, ids and utility are the walk's (utility evaluated by a
+/// fresh engine).
+fn assert_sound(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult, what: &str) {
+    let w = &r.walk_indices;
+    assert_eq!(
+        w.first(),
+        b.vertex_index(&req.start).as_ref(),
+        "{what}: start"
+    );
+    assert_eq!(w.last(), b.vertex_index(&req.end).as_ref(), "{what}: end");
+    b.check_walk(w).unwrap_or_else(|e| panic!("{what}: {e}"));
+    let len = b.walk_length(w);
+    assert!(
+        len <= req.budget + 1e-9,
+        "{what}: {len} m > {} m",
+        req.budget
+    );
+    assert!((r.length_m - len).abs() < 1e-9, "{what}: reported length");
+    assert_eq!(r.walk, b.walk_ids(w), "{what}: ids");
+    let e = UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
+    let u = e.utility(w).expect("utility");
+    assert!(
+        (u - r.utility_nats).abs() <= 1e-9 * u.abs().max(1.0),
+        "{what}: reported {} vs evaluated {u}",
+        r.utility_nats
+    );
+}
+
+/// The paper's rule (Algorithm 1): take the candidate of best gain per metre; stop as soon
+/// as it does not fit, even when a worse-ratio candidate would. Hand-built so that it
+/// stops in the very first round: from `s`, vertex `b` (14 m away) is worth far more per
+/// metre than `a` (0.3 m away, on a 10 m detour edge, so its samples pile up next to `s`),
+/// but the round trip to `b` (28 m) exceeds the 25 m budget while the one to `a` (20 m)
+/// fits.
+#[test]
+fn paper_greedy_stops_when_the_best_ratio_does_not_fit() {
+    let _serial = crate::serial();
+    let text = r#"{"format":"survey-building/1","name":"spurs",
+        "vertices":[{"id":"s","x":0,"y":0},{"id":"a","x":0.3,"y":0},{"id":"b","x":14,"y":0}],
+        "edges":[{"a":"s","b":"a","length":10},{"a":"s","b":"b"}],
+        "pilot":[{"x":0,"y":0.2,"rss":{"ap":-50}}]}"#;
+    let b = Arc::new(Building::from_json(text, "spurs").expect("building"));
+    let (s, a, far) = (0usize, 1usize, 2usize);
+    let budget = 25.0;
+    let e = UtilityEngine::new(b.clone(), kernel(), SurveyorModel::robot()).expect("engine");
+    let u0 = e.utility(&[s]).expect("u");
+    let ua = e.utility(&[s, a, s]).expect("u");
+    let ub = e.utility(&[s, far, s]).expect("u");
+    let (ratio_a, ratio_b) = ((ua - u0) / 20.0, (ub - u0) / 28.0);
+    // The premises of the case, checked rather than assumed.
+    assert!(ua > u0, "the spur to a gains something: {ua} vs {u0}");
+    assert!(
+        ratio_b > ratio_a,
+        "b has the best ratio: {ratio_b} vs {ratio_a}"
+    );
+    assert!(b.walk_length(&[s, a, s]) <= budget && b.walk_length(&[s, far, s]) > budget);
+
+    let req = request(&b, s, s, budget, Algorithm::Greedy);
+    let r = plan(b.clone(), &req, &Control::new()).expect("greedy");
+    assert_sound(&b, &req, &r, "greedy");
+    assert_eq!(r.walk, ["s"], "the paper's rule stops before taking a");
+    assert_eq!(r.termination, Termination::Completed);
+    assert!((r.utility_nats - u0).abs() < 1e-12);
+
+    // auto's greedy stage (feasible candidates only) goes on to a, and auto keeps it.
+    let p = problem(&b, s, s, budget);
+    let run = Run::new(Control::new(), None);
+    let g = Greedy::feasible().solve(&p, &run).expect("feasible greedy");
+    assert_eq!(g.walk, [s, a, s]);
+    let mut req = request(&b, s, s, budget, Algorithm::Auto);
+    req.time_limit = Some(Duration::from_secs(5));
+    let r = plan(b.clone(), &req, &Control::new()).expect("auto");
+    assert_sound(&b, &req, &r, "auto");
+    assert!(
+        r.utility_nats >= ua - 1e-12,
+        "auto {} < {ua}",
+        r.utility_nats
+    );
+}
+
+/// Crossover swaps tails at a shared intermediate vertex: both children are real walks
+/// from the start to the end, and their lengths add up to the parents' (the cut is at the
+/// same vertex); only children that fit may enter the population, which the GA checks
+/// (see the next test). Mutation returns only real walks that fit.
+#[test]
+fn genetic_operators_keep_walks_valid_and_within_budget() {
+    let _serial = crate::serial();
+    let b = grid(6, 5, 2.0, &[3, 11, 17]);
+    let (s, t) = (0, b.len() - 1);
+    let budget = p_budget(&b, s, t, 18.0);
+    let p = problem(&b, s, t, budget);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let walks: Vec<Vec<usize>> = (0..24).map(|_| random_walk(&p, &mut rng)).collect();
+    for w in &walks {
+        assert_valid(&p, w, "random walk");
+        assert!(p.fits(p.length(w)), "random walk over budget");
+    }
+    let (mut crossed, mut mutated) = (0, 0);
+    for (i, x) in walks.iter().enumerate() {
+        for y in &walks[i + 1..] {
+            if let Some((c1, c2)) = crossover(x, y, &mut rng) {
+                crossed += 1;
+                assert_valid(&p, &c1, "child 1");
+                assert_valid(&p, &c2, "child 2");
+                let parents = p.length(x) + p.length(y);
+                let children = p.length(&c1) + p.length(&c2);
+                assert!((parents - children).abs() < 1e-9, "{parents} vs {children}");
+                assert_eq!(c1.len() + c2.len(), x.len() + y.len());
+            }
+        }
+    }
+    // Random walks fill the budget, so mutations of them (which lengthen a walk) must
+    // mostly be refused; walks built for a budget 8 m smaller leave room for them.
+    let tight = problem(&b, s, t, budget - 8.0);
+    let roomy: Vec<Vec<usize>> = (0..24).map(|_| random_walk(&tight, &mut rng)).collect();
+    let mut refused = 0;
+    for x in walks.iter().chain(&roomy) {
+        for _ in 0..10 {
+            match mutate(&p, x, &mut rng) {
+                Some(m) => {
+                    mutated += 1;
+                    assert_valid(&p, &m, "mutant");
+                    assert!(
+                        p.fits(p.length(&m)),
+                        "mutant over budget: {} m",
+                        p.length(&m)
+                    );
+                    assert_ne!(&m, x, "a mutation changes the walk");
+                }
+                None => refused += 1,
+            }
+        }
+    }
+    assert!(
+        crossed > 50 && mutated > 50 && refused > 50,
+        "{crossed} crossovers, {mutated} mutations, {refused} refused"
+    );
+
+    // The whole GA: every member of the final population is feasible with its exact
+    // utility, best first.
+    let prm = Params {
+        population: 30,
+        generations: 4,
+        ..Params::default()
+    };
+    let (pop, _) = Genetic::new(prm, 9)
+        .evolve(&p, &Run::new(Control::new(), None))
+        .expect("evolve");
+    assert!(!pop.is_empty());
+    for (k, ind) in pop.iter().enumerate() {
+        assert_valid(&p, &ind.walk, "individual");
+        assert!(p.fits(ind.length), "individual {k} over budget");
+        assert!((ind.length - p.length(&ind.walk)).abs() < 1e-9);
+        let u = p.utility(&ind.walk).expect("u");
+        assert!(
+            (u - ind.utility).abs() <= 1e-9 * u.max(1.0),
+            "individual {k}"
+        );
+        if k > 0 {
+            assert!(
+                pop[k - 1].utility >= ind.utility,
+                "population not best first"
+            );
+        }
+    }
+}
+
+fn p_budget(b: &Building, s: usize, t: usize, extra: f64) -> f64 {
+    trailprint::plan::Metric::new(b).dist(s, t) + extra
+}
+
+fn assert_valid(p: &Problem, w: &[usize], what: &str) {
+    assert_eq!(w.first(), Some(&p.start), "{what}: start");
+    assert_eq!(w.last(), Some(&p.end), "{what}: end");
+    p.building
+        .check_walk(w)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+}
+
+/// `auto` starts from its greedy stage and only accepts improvements, so it never ends
+/// below it: on the paper's Area One at every budget and on an irregular grid.
+#[test]
+fn auto_is_never_below_its_greedy_stage() {
+    let _serial = crate::serial();
+    let one = instance("area-one.json");
+    let s = one.vertex_index("r0c0").expect("r0c0");
+    let mut cases: Vec<(Arc<Building>, usize, usize, f64)> = [30.0, 40.0, 50.0]
+        .iter()
+        .map(|&bu| (one.clone(), s, s, bu))
+        .collect();
+    let g = grid(6, 6, 2.0, &[2, 9, 20, 31]);
+    cases.push((g.clone(), 0, 35, p_budget(&g, 0, 35, 10.0)));
+    cases.push((g.clone(), 7, 7, 22.0));
+    for (b, s, t, budget) in cases {
+        let p = problem(&b, s, t, budget);
+        let greedy = Greedy::feasible()
+            .solve(&p, &Run::new(Control::new(), None))
+            .expect("greedy");
+        let mut req = request(&b, s, t, budget, Algorithm::Auto);
+        req.time_limit = Some(Duration::from_secs(2));
+        let r = plan(b.clone(), &req, &Control::new()).expect("auto");
+        assert_sound(&b, &req, &r, "auto");
+        assert!(
+            r.utility_nats >= greedy.utility - 1e-9,
+            "{} {budget} m: auto {} < greedy stage {}",
+            b.name,
+            r.utility_nats,
+            greedy.utility
+        );
+    }
+}
+
+/// A request that keeps every algorithm busy for many seconds (Area Two at 140 m, the
+/// paper's GA settings, exact search).
+fn long_request(b: &Building, alg: Algorithm) -> PlanRequest {
+    let mut req = request(b, 0, 0, 140.0, alg);
+    req.start = "b00".into();
+    req.end = "b00".into();
+    req.params = Params::default();
+    req.params.population = 2000;
+    req.params.generations = 50;
+    req.params.iterations = 1_000_000;
+    req.params.depth = 3;
+    req
+}
+
+/// Cancelled before it starts, each algorithm returns at once with `cancelled` and a
+/// feasible walk with its exact utility (the best so far, else the shortest walk).
+#[test]
+fn every_algorithm_honours_a_cancel_before_it_starts() {
+    let _serial = crate::serial();
+    let b = instance("area-two.json");
+    for alg in Algorithm::ALL {
+        let mut req = long_request(&b, alg);
+        req.time_limit = None;
+        let control = Control::new().with_cancel_token(Arc::new(AtomicBool::new(true)));
+        let t = Instant::now();
+        let r = plan(b.clone(), &req, &control).expect("a cancelled plan still answers");
+        let took = t.elapsed();
+        assert_eq!(r.termination, Termination::Cancelled, "{alg}");
+        assert_sound(&b, &req, &r, alg.name());
+        assert!(
+            took < Duration::from_secs(3),
+            "{alg}: {took:?} after a cancel"
+        );
+    }
+}
+
+/// With a 400 ms limit on a request that would take minutes, each algorithm stops soon
+/// after the limit with `time_limit` and its best feasible walk (coverage and greedy may
+/// also finish within it: then `completed`).
+#[test]
+fn every_algorithm_honours_its_time_limit() {
+    let _serial = crate::serial();
+    let b = instance("area-two.json");
+    let limit = Duration::from_millis(400);
+    for alg in Algorithm::ALL {
+        let mut req = long_request(&b, alg);
+        req.time_limit = Some(limit);
+        let t = Instant::now();
+        let r = plan(b.clone(), &req, &Control::new()).expect("plan");
+        let took = t.elapsed();
+        assert_sound(&b, &req, &r, alg.name());
+        println!(
+            "{alg}: {took:?}, {:?}, {:.3} nats",
+            r.termination, r.utility_nats
+        );
+        match alg {
+            Algorithm::Coverage | Algorithm::Greedy => assert!(
+                matches!(
+                    r.termination,
+                    Termination::TimeLimit | Termination::Completed
+                ),
+                "{alg}: {:?}",
+                r.termination
+            ),
+            _ => assert_eq!(r.termination, Termination::TimeLimit, "{alg}"),
+        }
+        if r.termination == Termination::TimeLimit {
+            assert!(
+                took < limit + Duration::from_millis(2500),
+                "{alg}: stopped {took:?} after a {limit:?} limit"
+            );
+        }
+    }
+}
+
+/// Local search (a stage of `auto`, not an algorithm of its own) stops on a cancel with
+/// `Cancelled` and at its deadline with the best walk so far, feasible.
+#[test]
+fn local_search_honours_cancel_and_deadline() {
+    let _serial = crate::serial();
+    let b = instance("area-two.json");
+    let s = b.vertex_index("b00").expect("b00");
+    let p = problem(&b, s, s, 140.0);
+    let walk = p.shortest_walk();
+    let u = p.utility(&walk).expect("u");
+    let cancelled = Run::new(
+        Control::new().with_cancel_token(Arc::new(AtomicBool::new(true))),
+        None,
+    );
+    let e = LocalSearch::new(1)
+        .improve(&p, &cancelled, walk.clone(), u)
+        .expect_err("cancelled");
+    assert!(matches!(e, trailprint::Error::Cancelled), "{e}");
+    let t = Instant::now();
+    let timed = Run::new(Control::new(), Some(Duration::from_millis(200)));
+    let (w, wu) = LocalSearch::new(1)
+        .improve(&p, &timed, walk, u)
+        .expect("local search");
+    assert!(t.elapsed() < Duration::from_secs(3), "{:?}", t.elapsed());
+    assert_valid(&p, &w, "local search");
+    assert!(p.fits(p.length(&w)));
+    assert!(wu >= u);
+    assert!((p.utility(&w).expect("u") - wu).abs() <= 1e-9 * wu.max(1.0));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4, ..ProptestConfig::default() })]
+
+    /// Random irregular grids of 30 to 56 vertices, random end points and budgets: every
+    /// algorithm's walk is sound (start, end, real edges, budget, reported utility equal
+    /// to an independent evaluation).
+    #[test]
+    fn every_planner_is_sound_on_larger_random_graphs(
+        w in 5usize..8, h in 6usize..9, drop in proptest::collection::vec(0usize..120, 0..12),
+        s in 0usize..60, t in 0usize..60, extra in 2.0f64..16.0, seed in 0u64..1000,
+    ) {
+        let b = grid(w, h, 2.0, &drop);
+        let n = b.len();
+        prop_assert!((30..=60).contains(&n));
+        let (s, t) = (s % n, t % n);
+        let budget = p_budget(&b, s, t, extra);
+        for alg in Algorithm::ALL {
+            let mut req = request(&b, s, t, budget, alg);
+            req.seed = seed;
+            req.time_limit = Some(Duration::from_millis(if alg == Algorithm::Auto { 1000 } else { 1500 }));
+            let r = plan(b.clone(), &req, &Control::new()).expect("plan");
+            assert_sound(&b, &req, &r, alg.name());
+        }
+    }
+}
