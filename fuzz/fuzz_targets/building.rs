@@ -41,8 +41,15 @@ fuzz_target!(|data: &[u8]| {
                     "refused with an error of the wrong kind: {e:?}"
                 );
                 assert!(!e.to_string().is_empty());
-                assert!(imported.is_err(), "the store accepts what the validator refuses");
-                assert_eq!(before, snapshot(store), "a refused import changed the store");
+                assert!(
+                    imported.is_err(),
+                    "the store accepts what the validator refuses"
+                );
+                assert_eq!(
+                    before,
+                    snapshot(store),
+                    "a refused import changed the store"
+                );
             }
             Ok(b) => {
                 let file = match parsed {
@@ -64,9 +71,15 @@ fuzz_target!(|data: &[u8]| {
                 }
                 // Deleting it leaves the store as it was (autoincrement counters aside).
                 let rows = |v: Vec<String>| -> Vec<String> {
-                    v.into_iter().filter(|r| !r.starts_with("sqlite_sequence")).collect()
+                    v.into_iter()
+                        .filter(|r| !r.starts_with("sqlite_sequence"))
+                        .collect()
                 };
-                assert_eq!(rows(before), rows(snapshot(store)), "delete left rows behind");
+                assert_eq!(
+                    rows(before),
+                    rows(snapshot(store)),
+                    "delete left rows behind"
+                );
             }
         }
     });

@@ -121,18 +121,33 @@ fn check_sane(s: &Session) {
             "sample on floor {}",
             p.floor
         );
-        assert!(smp.sigma_m.is_finite() && smp.sigma_m >= 0.0, "sigma {}", smp.sigma_m);
+        assert!(
+            smp.sigma_m.is_finite() && smp.sigma_m >= 0.0,
+            "sigma {}",
+            smp.sigma_m
+        );
         assert!(smp.extra_noise.is_finite() && smp.extra_noise >= 0.0);
         for (ap, v) in &smp.rss {
             assert!(trailprint::building::rss_ok(*v), "{ap}: {v}");
         }
     }
     let g = s.guidance();
-    assert!(g.distance_m.is_finite() && g.distance_m >= 0.0, "guidance {g:?}");
+    assert!(
+        g.distance_m.is_finite() && g.distance_m >= 0.0,
+        "guidance {g:?}"
+    );
     if let Ok(p) = s.progress() {
-        assert!((0.0..=1.0).contains(&p.fraction_done), "fraction {}", p.fraction_done);
+        assert!(
+            (0.0..=1.0).contains(&p.fraction_done),
+            "fraction {}",
+            p.fraction_done
+        );
         assert!(p.remaining_m.is_finite() && p.remaining_m >= 0.0, "{p:?}");
-        assert!(p.elapsed_s.is_finite() && p.elapsed_s >= 0.0, "elapsed {}", p.elapsed_s);
+        assert!(
+            p.elapsed_s.is_finite() && p.elapsed_s >= 0.0,
+            "elapsed {}",
+            p.elapsed_s
+        );
         assert!(p.reserve_m.is_finite() && p.reserve_m >= 0.0);
     }
 }
@@ -172,6 +187,7 @@ fuzz_target!(|data: &[u8]| {
     };
     let mut t = 1_700_000_000_000i64;
     let mut ops = 0;
+    let mut replans = 0;
     while !r.is_empty() && ops < 64 {
         ops += 1;
         let before = s.digest();
@@ -179,10 +195,19 @@ fuzz_target!(|data: &[u8]| {
         let before_seq = s.last_seq();
         let ended = matches!(s.status(), SessionStatus::Finished | SessionStatus::Aborted);
         if r.u8() % 16 == 0 {
-            // An explicit replan.
+            // An explicit replan (a few per input: each plans afresh, about 0.2 s under the
+            // sanitizer, and sixty of them would read as a timeout).
+            replans += 1;
+            if replans > 4 {
+                continue;
+            }
             if s.replan().is_err() {
                 assert_eq!(before, s.digest(), "a failed replan changed the session");
-                assert_eq!(before_len, log_len(&log), "a failed replan wrote to the log");
+                assert_eq!(
+                    before_len,
+                    log_len(&log),
+                    "a failed replan wrote to the log"
+                );
             }
             continue;
         }
@@ -190,7 +215,11 @@ fuzz_target!(|data: &[u8]| {
         match s.record(ev.clone()) {
             Err(e) => {
                 assert!(!e.to_string().is_empty());
-                assert_eq!(before, s.digest(), "refused {ev:?} ({e}) changed the session");
+                assert_eq!(
+                    before,
+                    s.digest(),
+                    "refused {ev:?} ({e}) changed the session"
+                );
                 assert_eq!(before_len, log_len(&log), "refused {ev:?} ({e}) was logged");
             }
             Ok(ack) => {

@@ -134,7 +134,10 @@ pub fn check_reexport(b: &Building, given: Option<&BuildingFile>, what: &str) {
             e.length
         );
     }
-    assert!(b.total_edge_length().is_finite(), "{what}: total edge length");
+    assert!(
+        b.total_edge_length().is_finite(),
+        "{what}: total edge length"
+    );
 }
 
 /// Every row of every table of the store, in rowid order, as text: equal snapshots mean an
