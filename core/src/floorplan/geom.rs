@@ -112,14 +112,11 @@ pub(crate) struct GridPoint {
 /// about `spacing` over its extent (at least one), centred, so that a corridor narrower
 /// than 1.5 spacings gets one row down its middle. Points inside the polygon and at least
 /// `clearance` from its boundary are kept.
-pub(crate) fn grid_points(poly: &Polygon<f64>, spacing: f64, clearance: f64) -> Vec<GridPoint> {
+/// The frame of a polygon's grid: the angle of its walls and its extent `(u0, v0, u1, v1)`
+/// along them.
+fn grid_frame(poly: &Polygon<f64>) -> (f64, [f64; 4]) {
     let theta = dominant_angle(poly);
     let (c, s) = (theta.cos(), theta.sin());
-    let to_uv = |p: Coord<f64>| (p.x * c + p.y * s, -p.x * s + p.y * c);
-    let from_uv = |u: f64, v: f64| Coord {
-        x: u * c - v * s,
-        y: u * s + v * c,
-    };
     let (mut u0, mut v0, mut u1, mut v1) = (
         f64::INFINITY,
         f64::INFINITY,
@@ -127,12 +124,34 @@ pub(crate) fn grid_points(poly: &Polygon<f64>, spacing: f64, clearance: f64) -> 
         f64::NEG_INFINITY,
     );
     for p in poly.exterior().coords() {
-        let (u, v) = to_uv(*p);
+        let (u, v) = (p.x * c + p.y * s, -p.x * s + p.y * c);
         u0 = u0.min(u);
         v0 = v0.min(v);
         u1 = u1.max(u);
         v1 = v1.max(v);
     }
+    (theta, [u0, v0, u1, v1])
+}
+
+/// How many cells [`grid_points`] tries for a polygon (in `f64`: a polygon in the wrong
+/// units has more cells than a `usize` holds), and its extent `(width, height)` in metres.
+pub(crate) fn grid_cells(poly: &Polygon<f64>, spacing: f64) -> (f64, f64, f64) {
+    let (_, [u0, v0, u1, v1]) = grid_frame(poly);
+    if !(u1 > u0 && v1 > v0) {
+        return (0.0, 0.0, 0.0);
+    }
+    let (w, h) = (u1 - u0, v1 - v0);
+    let cells = (w / spacing).round().max(1.0) * (h / spacing).round().max(1.0);
+    (cells, w, h)
+}
+
+pub(crate) fn grid_points(poly: &Polygon<f64>, spacing: f64, clearance: f64) -> Vec<GridPoint> {
+    let (theta, [u0, v0, u1, v1]) = grid_frame(poly);
+    let (c, s) = (theta.cos(), theta.sin());
+    let from_uv = |u: f64, v: f64| Coord {
+        x: u * c - v * s,
+        y: u * s + v * c,
+    };
     if !(u1 > u0 && v1 > v0) {
         return Vec::new();
     }

@@ -47,7 +47,16 @@ fn files_of(path: &Path) -> Result<HashMap<String, String>> {
         return Ok(out);
     }
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| {
+    files_of_zip(file, path)
+}
+
+/// The IMDF files of a zip archive (`path` names it in errors).
+pub(crate) fn files_of_zip<R: Read + std::io::Seek>(
+    reader: R,
+    path: &Path,
+) -> Result<HashMap<String, String>> {
+    let mut out = HashMap::new();
+    let mut zip = zip::ZipArchive::new(reader).map_err(|e| {
         Error::invalid(
             &path.display().to_string(),
             "$",
@@ -136,8 +145,13 @@ fn unit_kind(category: &str) -> Option<SpaceKind> {
 
 /// Reads an IMDF folder or zip into a plan in metres.
 pub(crate) fn read(path: &Path) -> Result<Plan> {
-    let origin = path.display().to_string();
-    let files = files_of(path)?;
+    read_files(&files_of(path)?, &path.display().to_string())
+}
+
+/// Reads an IMDF data set given as its files (`unit.geojson` -> text) into a plan in
+/// metres; `origin` names the data set in errors.
+pub(crate) fn read_files(files: &HashMap<String, String>, origin: &str) -> Result<Plan> {
+    let origin = origin.to_string();
     let mut warnings = Warnings::default();
     let layer = |name: &str, required: bool, w: &mut Warnings| -> Result<Vec<(usize, Feature)>> {
         match files.get(name) {

@@ -33,6 +33,7 @@ use geo::{Coord, LineString, Polygon};
 use serde::Serialize;
 
 pub use frame::LocalFrame;
+pub use network::MAX_GRID_CELLS;
 
 use crate::building::{BuildingFile, FloorSpec, GeoOrigin};
 use crate::{Error, Result};
@@ -186,6 +187,31 @@ pub fn import_osm_text(
     check_spacing(options.spacing_m)?;
     let plan = osm::parse(text, origin)?;
     finish(plan, Format::OsmIndoor, options, origin, origin)
+}
+
+/// Imports an IMDF data set given as its files in memory (`"unit.geojson"` -> text, names
+/// in lower case); `origin` names it in errors and is the fallback name.
+pub fn import_imdf_files(
+    files: &std::collections::HashMap<String, String>,
+    origin: &str,
+    options: &ImportOptions,
+) -> Result<FloorplanImport> {
+    check_spacing(options.spacing_m)?;
+    let plan = imdf::read_files(files, origin)?;
+    finish(plan, Format::Imdf, options, origin, origin)
+}
+
+/// Imports an IMDF zip archive given as bytes; `origin` names it in errors and is the
+/// fallback name.
+pub fn import_imdf_zip(
+    bytes: &[u8],
+    origin: &str,
+    options: &ImportOptions,
+) -> Result<FloorplanImport> {
+    check_spacing(options.spacing_m)?;
+    let files = imdf::files_of_zip(std::io::Cursor::new(bytes), Path::new(origin))?;
+    let plan = imdf::read_files(&files, origin)?;
+    finish(plan, Format::Imdf, options, origin, origin)
 }
 
 fn finish(

@@ -39,6 +39,10 @@ use crate::{Error, Result};
 
 /// Grid points keep at least this distance from walls, metres.
 pub const CLEARANCE_M: f64 = 0.3;
+/// Most grid cells the walkable network tries over all spaces: 1,000,000, 4 km² of floor at
+/// the default 2 m spacing (a hundred floors of a large office tower). A plan that needs more
+/// is refused before any is laid.
+pub const MAX_GRID_CELLS: usize = 1_000_000;
 /// A door joins the spaces whose outline passes within this distance, metres.
 pub const DOOR_SNAP_M: f64 = 0.5;
 /// Slack of an edge at a door or a shared boundary, and of a wall crossing at a door, metres.
@@ -231,6 +235,29 @@ pub(crate) fn build(
                 }
             },
         ));
+    }
+    // The grid's size before laying it: a space a degree across (a typo in a coordinate, a
+    // feature in the wrong place) would otherwise take hours and all the memory there is.
+    let mut cells = 0.0;
+    for sp in &spaces {
+        if matches!(sp.kind, SpaceKind::Elevator | SpaceKind::Stairs) {
+            continue;
+        }
+        let (n, w, h) = geom::grid_cells(&sp.polygon, spacing);
+        cells += n;
+        if cells > MAX_GRID_CELLS as f64 {
+            return Err(Error::invalid(
+                origin,
+                "$",
+                format!(
+                    "the walkable network would need {cells:.3e} grid cells at {spacing} m \
+                     spacing, over the limit of {MAX_GRID_CELLS} ({} is {w:.0} m by {h:.0} m \
+                     on floor {}): check its coordinates, or import with a larger spacing",
+                    sp.describe(),
+                    sp.floor
+                ),
+            ));
+        }
     }
     let rank: BTreeMap<i64, usize> = floors.iter().enumerate().map(|(i, f)| (f.id, i)).collect();
     let mut net = Net::default();

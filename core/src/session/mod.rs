@@ -345,6 +345,7 @@ impl Session {
     /// the surveyor off-route and automatic replanning is on. A rejected event writes
     /// nothing and changes nothing.
     pub fn record(&mut self, event: Event) -> Result<Ack> {
+        let event = event.without_negative_zeros();
         let b = self.building.clone();
         self.tracker.check(&b, &event)?;
         let entry = self.tracker.log_event(&b, &event);

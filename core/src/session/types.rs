@@ -241,6 +241,25 @@ impl Event {
         }
     }
 
+    /// The event with every negative zero (an RSS of -0 dBm, a pose at x = -0) made +0:
+    /// both spell one value, and the SQLite log stores both as 0, so a session that kept the
+    /// sign would differ from the same session resumed from its log.
+    pub fn without_negative_zeros(mut self) -> Event {
+        match &mut self {
+            Event::Scan { readings, .. } => {
+                for r in readings {
+                    r.rss_dbm += 0.0;
+                }
+            }
+            Event::Pose { x, y, .. } => {
+                *x += 0.0;
+                *y += 0.0;
+            }
+            _ => {}
+        }
+        self
+    }
+
     /// Short name of the kind (`step`, `scan`, ...).
     pub fn kind(&self) -> &'static str {
         match self {

@@ -1,0 +1,41 @@
+//! The IMDF importer: a zip archive (input starting with `PK`), or the data set's files given
+//! in memory, separated by NUL bytes, in the order `level`, `unit`, `opening`, `amenity`,
+//! `relationship`, `venue`, `building` (a missing part is a missing file).
+//!
+//! Invariants: as for the OSM importer (an `Err` and never a panic for a refused plan; an
+//! accepted plan is a valid building that re-exports to an equal one; bounded memory and time).
+#![no_main]
+
+use std::collections::HashMap;
+
+use libfuzzer_sys::fuzz_target;
+use trailprint::floorplan::{ImportOptions, import_imdf_files, import_imdf_zip};
+use trailprint_fuzz::check_floorplan;
+
+const FILES: [&str; 7] = [
+    "level.geojson",
+    "unit.geojson",
+    "opening.geojson",
+    "amenity.geojson",
+    "relationship.geojson",
+    "venue.geojson",
+    "building.geojson",
+];
+
+fuzz_target!(|data: &[u8]| {
+    let options = ImportOptions::default();
+    if data.starts_with(b"PK") {
+        check_floorplan(import_imdf_zip(data, "fuzz.zip", &options), "imdf zip");
+        return;
+    }
+    let mut files = HashMap::new();
+    for (name, part) in FILES.iter().zip(data.split(|&b| b == 0)) {
+        let Ok(text) = std::str::from_utf8(part) else {
+            return;
+        };
+        if !text.is_empty() {
+            files.insert(name.to_string(), text.to_string());
+        }
+    }
+    check_floorplan(import_imdf_files(&files, "fuzz-imdf", &options), "imdf");
+});
