@@ -18,6 +18,7 @@ mod cli_synth;
 mod experiment_csv;
 mod floorplan_cli;
 mod floorplan_import;
+mod fuzz_regressions;
 mod localize;
 mod plan_exact;
 mod plan_props;
