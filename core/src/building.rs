@@ -782,7 +782,10 @@ impl Building {
             .iter()
             .map(|v| {
                 let have: Vec<char> = v.id.to_lowercase().chars().collect();
-                (edit_distance(&want, &have), v.id.as_str())
+                let d = edit_distance(&want, &have);
+                // Replacing the whole id is no near miss ("q" is not a typo of "a").
+                let whole = d >= want.len().max(have.len());
+                (if whole { usize::MAX } else { d }, v.id.as_str())
             })
             .filter(|&(d, _)| d <= limit)
             .collect();

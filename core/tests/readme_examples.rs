@@ -92,6 +92,15 @@ fn readme_examples_run_as_written() {
             let file = dir.path().join(&args[i + 1]);
             let text = std::fs::read_to_string(&file).expect("output written");
             assert!(text.starts_with("<svg"), "{line}");
+            // The plan ids the README names are the ones the commands before made.
+            let expect = match args[i + 1].as_str() {
+                "office.svg" => "<title>Office</title>",
+                "team.svg" => "surveyor 2: plan 4",
+                "plan.svg" => "plan 2: b00 -&gt; t29",
+                "session.svg" => "session 1 (",
+                _ => "<svg",
+            };
+            assert!(text.contains(expect), "{line}: no {expect:?}");
         }
     }
     // They used the default database, which now holds what the README says.

@@ -1,6 +1,7 @@
 //! Rendering tests: the SVG is well formed and holds what was asked for.
 
 use super::*;
+use crate::eval::reference_grid;
 use crate::samples::{SurveyorModel, sample_walk};
 use crate::synth::DEMO_BUILDING_JSON;
 
@@ -41,9 +42,10 @@ fn building_alone_has_one_element_per_edge_vertex_and_pilot() {
     let svg = render_svg(&b, &Scene::default(), &RenderOptions::default()).expect("svg");
     assert_balanced(&svg);
     assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""));
-    assert_eq!(count(&svg, "class=\"edge\""), b.edges.len());
-    assert_eq!(count(&svg, "class=\"vertex\""), b.len());
-    assert_eq!(count(&svg, "class=\"pilot\""), b.pilot.len());
+    // One element per edge, vertex and pilot location, plus the legend's swatch of each.
+    assert_eq!(count(&svg, "class=\"edge\""), b.edges.len() + 1);
+    assert_eq!(count(&svg, "class=\"vertex\""), b.len() + 1);
+    assert_eq!(count(&svg, "class=\"pilot\""), b.pilot.len() + 1);
     assert_eq!(count(&svg, "<polyline"), 0);
     assert_eq!(count(&svg, "class=\"heat\""), 0, "no kernel, no heat map");
     assert_eq!(count(&svg, "class=\"floor\""), 1);
@@ -75,7 +77,7 @@ fn walk_samples_and_heat_map() {
     // c02 -> c03 -> c02: that edge is walked there and back, drawn as two lanes.
     assert_eq!(count(&svg, " repeat\""), 2);
     assert_eq!(count(&svg, "class=\"arrow\""), ids.len() - 1);
-    assert_eq!(count(&svg, "class=\"sample\""), samples.len());
+    assert_eq!(count(&svg, "class=\"sample\""), samples.len() + 1, "and the legend's");
     let grid = reference_grid(&b, 0.5, 1.5);
     assert_eq!(count(&svg, "class=\"heat\""), grid.len());
     let labels = count(&svg, "class=\"label\"");
