@@ -938,7 +938,13 @@ fn not_json_object(text: &str) -> Option<String> {
     if trimmed.starts_with(['{', '[']) {
         return None;
     }
-    let first: String = trimmed.lines().next().unwrap_or("").chars().take(40).collect();
+    let first: String = trimmed
+        .lines()
+        .next()
+        .unwrap_or("")
+        .chars()
+        .take(40)
+        .collect();
     Some(format!("it begins with {first:?}"))
 }
 

@@ -40,8 +40,20 @@ fn with_plan(db: &Path) -> (String, i64) {
     let out = run_ok(
         db,
         &[
-            "plan", "--building", &name, "--start", "f0-c00", "--end", "f0-c15", "--budget",
-            "60", "--model", "human", "--time-limit", "0.3", "--json",
+            "plan",
+            "--building",
+            &name,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "60",
+            "--model",
+            "human",
+            "--time-limit",
+            "0.3",
+            "--json",
         ],
     );
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
@@ -58,12 +70,24 @@ fn plans_are_listed_and_shown_with_their_walk() {
 
     let list = run_ok(&db, &["plans"]);
     let header = list.lines().next().expect("header");
-    for col in ["id", "building", "route", "budget_m", "length_m", "utility", "algorithm", "created"] {
+    for col in [
+        "id",
+        "building",
+        "route",
+        "budget_m",
+        "length_m",
+        "utility",
+        "algorithm",
+        "created",
+    ] {
         assert!(header.contains(col), "{header}");
     }
     let row = list.lines().nth(1).expect("row");
     assert!(row.trim_start().starts_with(&id.to_string()), "{row}");
-    assert!(row.contains("f0-c00 -> f0-c15") && row.contains("60.0") && row.contains("human"), "{row}");
+    assert!(
+        row.contains("f0-c00 -> f0-c15") && row.contains("60.0") && row.contains("human"),
+        "{row}"
+    );
 
     let json: serde_json::Value =
         serde_json::from_str(run_ok(&db, &["plans", &name, "--json"]).trim()).expect("json");
@@ -73,7 +97,12 @@ fn plans_are_listed_and_shown_with_their_walk() {
     assert_eq!(rows[0]["building"], name.as_str());
     assert_eq!(rows[0]["budget_m"], 60.0);
     assert!(rows[0]["length_m"].as_f64().expect("length") <= 60.0 + 1e-9);
-    assert!(rows[0]["created"].as_str().expect("created").starts_with("20"));
+    assert!(
+        rows[0]["created"]
+            .as_str()
+            .expect("created")
+            .starts_with("20")
+    );
 
     let e = run_err(&db, &["plans", "No such building"]);
     assert!(e.contains("No such building") && e.contains(&name), "{e}");
@@ -90,15 +119,27 @@ fn plans_are_listed_and_shown_with_their_walk() {
         .iter()
         .map(|v| v.as_str().expect("id").to_string())
         .collect();
-    assert!(show.contains(&format!("walk          {}", walk.join(","))), "{show}");
-    assert!(show.contains(&format!("steps         {} vertices", walk.len())), "{show}");
+    assert!(
+        show.contains(&format!("walk          {}", walk.join(","))),
+        "{show}"
+    );
+    assert!(
+        show.contains(&format!("steps         {} vertices", walk.len())),
+        "{show}"
+    );
     let last_row = format!("{:>4}  {}", walk.len(), walk[walk.len() - 1]);
     assert!(show.contains(&last_row), "{show}");
     assert!(show.contains("at 1.2 m/s"), "{show}");
-    assert!(show.contains(&format!("{:.1} m of the 60 m budget", stored["length_m"].as_f64().expect("len"))));
+    assert!(show.contains(&format!(
+        "{:.1} m of the 60 m budget",
+        stored["length_m"].as_f64().expect("len")
+    )));
 
     let sheet = run_ok(&db, &["plans", "show", &id.to_string(), "--instructions"]);
-    assert!(sheet.contains("Start at f0-c00 on Ground; check in there"), "{sheet}");
+    assert!(
+        sheet.contains("Start at f0-c00 on Ground; check in there"),
+        "{sheet}"
+    );
     let last = sheet.lines().last().expect("line");
     assert!(
         last.contains(&format!("step {:>3}  In ", walk.len()))
@@ -107,7 +148,10 @@ fn plans_are_listed_and_shown_with_their_walk() {
     );
 
     let e = run_err(&db, &["plans", "show", "999"]);
-    assert!(e.contains("no plan 999") && e.contains(&format!("plan ids there: {id}")), "{e}");
+    assert!(
+        e.contains("no plan 999") && e.contains(&format!("plan ids there: {id}")),
+        "{e}"
+    );
 }
 
 #[test]
@@ -118,20 +162,40 @@ fn vertices_lists_ids_labels_floors_and_positions() {
     let b = trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
         .expect("demo");
     let text = run_ok(&db, &["vertices", &b.name]);
-    assert!(text.starts_with(&format!("{}: {} vertices", b.name, b.len())), "{text}");
+    assert!(
+        text.starts_with(&format!("{}: {} vertices", b.name, b.len())),
+        "{text}"
+    );
     assert_eq!(text.lines().count(), b.len() + 2);
-    let door = b.vertices.iter().find(|v| v.label.is_some()).expect("a labelled vertex");
+    let door = b
+        .vertices
+        .iter()
+        .find(|v| v.label.is_some())
+        .expect("a labelled vertex");
     let line = text
         .lines()
         .find(|l| l.starts_with(&format!("{} ", door.id)))
         .expect("door line");
-    assert!(line.contains(door.label.as_deref().expect("label")) && line.contains("Ground"), "{line}");
+    assert!(
+        line.contains(door.label.as_deref().expect("label")) && line.contains("Ground"),
+        "{line}"
+    );
     assert!(line.contains(&format!("{:.2}", door.pos.x)), "{line}");
 
     // From a file too, as JSON, filtered.
     let file = shared_instance("area-two.json");
     let json: serde_json::Value = serde_json::from_str(
-        run_ok(&db, &["vertices", file.to_str().expect("utf-8"), "--grep", "t2", "--json"]).trim(),
+        run_ok(
+            &db,
+            &[
+                "vertices",
+                file.to_str().expect("utf-8"),
+                "--grep",
+                "t2",
+                "--json",
+            ],
+        )
+        .trim(),
     )
     .expect("json");
     let ids: Vec<&str> = json
@@ -179,7 +243,10 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = dir.path().join("t.db");
     let out = run_ok(&db, &["demo", "--budget", "40"]);
-    assert!(!out.contains("Robot {") && !out.contains("Human {") && !out.contains("interval:"), "{out}");
+    assert!(
+        !out.contains("Robot {") && !out.contains("Human {") && !out.contains("interval:"),
+        "{out}"
+    );
     assert!(out.contains("robot, a scan every 0.5 m"), "{out}");
     let next: Vec<&str> = out
         .lines()
@@ -191,7 +258,10 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
     // Each next step runs as printed (the db option included), bar the arguments that
     // are words of the explanation after it.
     let render = next[0].split("     ").next().expect("command");
-    assert!(render.contains("render --plan 1 -o demo-plan.svg"), "{render}");
+    assert!(
+        render.contains("render --plan 1 -o demo-plan.svg"),
+        "{render}"
+    );
     let words: Vec<String> = shell_words(render);
     let status = std::process::Command::new(store_common::BIN)
         .args(&words)
@@ -241,8 +311,19 @@ fn plan_is_printed_for_a_person() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = dir.path().join("t.db");
     let args = [
-        "plan", "--building", DEMO, "--start", "f0-c00", "--end", "f0-c15", "--budget", "70",
-        "--model", "human", "--time-limit", "0.3",
+        "plan",
+        "--building",
+        DEMO,
+        "--start",
+        "f0-c00",
+        "--end",
+        "f0-c15",
+        "--budget",
+        "70",
+        "--model",
+        "human",
+        "--time-limit",
+        "0.3",
     ];
     let out = run_ok(&db, &args);
     let walk: Vec<&str> = out
@@ -279,18 +360,22 @@ fn plan_is_printed_for_a_person() {
     let mut with = args.to_vec();
     with.push("--instructions");
     let sheet = run_ok(&db, &with);
-    let lines: Vec<&str> = sheet
-        .lines()
-        .filter(|l| l.contains(". step "))
-        .collect();
+    let lines: Vec<&str> = sheet.lines().filter(|l| l.contains(". step ")).collect();
     assert!(!lines.is_empty(), "{sheet}");
     for l in &lines {
         let sentence = l.split_once("  In ").map(|x| x.1).expect("sentence");
         assert!(sentence.contains(" m at "), "{l}");
         assert!(
-            ["turn left", "turn right", "turn back", "go straight on", "change floor", "end of the walk"]
-                .iter()
-                .any(|w| sentence.contains(w)),
+            [
+                "turn left",
+                "turn right",
+                "turn back",
+                "go straight on",
+                "change floor",
+                "end of the walk"
+            ]
+            .iter()
+            .any(|w| sentence.contains(w)),
             "{l}"
         );
     }
@@ -304,7 +389,10 @@ fn plan_is_printed_for_a_person() {
                 .expect("distance")
         })
         .sum();
-    assert!((total - length).abs() <= 0.5 * lines.len() as f64 + 1e-9, "{total} vs {length}");
+    assert!(
+        (total - length).abs() <= 0.5 * lines.len() as f64 + 1e-9,
+        "{total} vs {length}"
+    );
 }
 
 #[test]
@@ -314,9 +402,22 @@ fn errors_say_what_would_do() {
     // A near-miss vertex id gets the nearest ids.
     let e = run_err(
         &db,
-        &["plan", "--building", DEMO, "--start", "f0-c0", "--end", "f0-c15", "--budget", "30"],
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c0",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "30",
+        ],
     );
-    assert!(e.contains("start: unknown vertex \"f0-c0\"") && e.contains("did you mean \"f0-c00\""), "{e}");
+    assert!(
+        e.contains("start: unknown vertex \"f0-c0\"") && e.contains("did you mean \"f0-c00\""),
+        "{e}"
+    );
     let e = run_err(
         &db,
         &["utility", "--building", DEMO, "--walk", "f0-c00,f0-c1"],
@@ -332,24 +433,54 @@ fn errors_say_what_would_do() {
         std::fs::write(&path, text).expect("write");
         let e = run_err(
             &db,
-            &["plan", "--building", path.to_str().expect("utf-8"), "--start", "a", "--end", "a", "--budget", "5"],
+            &[
+                "plan",
+                "--building",
+                path.to_str().expect("utf-8"),
+                "--start",
+                "a",
+                "--end",
+                "a",
+                "--budget",
+                "5",
+            ],
         );
-        assert!(e.contains("not a JSON survey-building/1 file") && e.contains(begins), "{e}");
-        assert!(!e.contains("expected ident") && !e.contains("expected value"), "{e}");
+        assert!(
+            e.contains("not a JSON survey-building/1 file") && e.contains(begins),
+            "{e}"
+        );
+        assert!(
+            !e.contains("expected ident") && !e.contains("expected value"),
+            "{e}"
+        );
     }
     // A negative budget is a number the planner refuses, not an unknown option.
     for cmd in ["plan", "simulate"] {
-        let mut args = vec![cmd, "--building", DEMO, "--start", "f0-c00", "--end", "f0-c00", "--budget", "-5"];
+        let mut args = vec![
+            cmd,
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c00",
+            "--budget",
+            "-5",
+        ];
         if cmd == "simulate" {
             args.extend(["--surveyor", "human"]);
         }
         let e = run_err(&db, &args);
-        assert!(e.contains("budget must be a positive") && e.contains("-5"), "{cmd}: {e}");
+        assert!(
+            e.contains("budget must be a positive") && e.contains("-5"),
+            "{cmd}: {e}"
+        );
     }
     // A directory as --db.
     let e = run_err(dir.path(), &["buildings"]);
     assert!(
-        e.contains("is a directory") && e.contains(&format!("{}", dir.path().join("trailprint.db").display())),
+        e.contains("is a directory")
+            && e.contains(&format!("{}", dir.path().join("trailprint.db").display())),
         "{e}"
     );
 }
@@ -366,27 +497,53 @@ fn render_draws_plans_sessions_and_teams() {
         run_ok(&db, &all);
         std::fs::read_to_string(&path).expect("svg")
     };
-    let stored = trailprint::Store::open(&db).expect("open").load_plan(id).expect("plan");
+    let stored = trailprint::Store::open(&db)
+        .expect("open")
+        .load_plan(id)
+        .expect("plan");
     let svg = svg_of(&["render", "--plan", &id.to_string()]);
     assert_eq!(
         svg.matches("class=\"walk walk-0").count(),
         stored.record.walk.len() - 1,
         "one segment per step of the stored walk"
     );
-    assert!(svg.contains(&format!("plan {id}: f0-c00 -&gt; f0-c15")), "caption");
-    assert!(svg.contains("class=\"heat\""), "heat map with the plan's kernel");
+    assert!(
+        svg.contains(&format!("plan {id}: f0-c00 -&gt; f0-c15")),
+        "caption"
+    );
+    assert!(
+        svg.contains("class=\"heat\""),
+        "heat map with the plan's kernel"
+    );
     assert!(svg.contains("class=\"step\""), "step numbers");
-    assert!(svg.contains(&format!("class=\"legend-text\" x=\"18\" y=\"4\">plan {id},")));
+    assert!(svg.contains(&format!(
+        "class=\"legend-text\" x=\"18\" y=\"4\">plan {id},"
+    )));
 
     // A session: the walk as walked, with its scans.
     let out = run_ok(
         &db,
         &[
-            "simulate", "--building", &name, "--start", "f0-c00", "--end", "f0-c15", "--budget",
-            "40", "--surveyor", "human", "--deviate", "0.2", "--time-limit", "0.3", "--json",
+            "simulate",
+            "--building",
+            &name,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "40",
+            "--surveyor",
+            "human",
+            "--deviate",
+            "0.2",
+            "--time-limit",
+            "0.3",
+            "--json",
         ],
     );
-    let sim: serde_json::Value = serde_json::from_str(out.lines().last().expect("json")).expect("json");
+    let sim: serde_json::Value =
+        serde_json::from_str(out.lines().last().expect("json")).expect("json");
     let sid = sim["session_id"].as_i64().expect("session id");
     let svg = svg_of(&["render", "--session", &sid.to_string()]);
     assert_eq!(
@@ -395,21 +552,48 @@ fn render_draws_plans_sessions_and_teams() {
         "one dot per collected scan, plus the legend's"
     );
     assert!(svg.contains("class=\"track\""), "the track as walked");
-    assert!(svg.contains(&format!("session {sid} (finished)")), "caption");
+    assert!(
+        svg.contains(&format!("session {sid} (finished)")),
+        "caption"
+    );
 
     // A team: plan ids and typed walks, one colour each.
     let svg = svg_of(&[
-        "render", "--team", &id.to_string(), "--team", "f0-c15,f0-c14,f0-c13",
+        "render",
+        "--team",
+        &id.to_string(),
+        "--team",
+        "f0-c15,f0-c14,f0-c13",
     ]);
     assert!(svg.contains("class=\"walk walk-0") && svg.contains("class=\"walk walk-1"));
-    assert!(svg.contains("surveyor 2: 4.0 m"), "legend names each surveyor");
+    assert!(
+        svg.contains("surveyor 2: 4.0 m"),
+        "legend names each surveyor"
+    );
     let e = run_err(&db, &["render", "--team", "f0-c00,f0-c01", "-o", "x.svg"]);
     assert!(e.contains("--building"), "{e}");
     let e = run_err(&db, &["render", "--plan", "999", "-o", "x.svg"]);
     assert!(e.contains("no plan 999"), "{e}");
     // A plan of one building drawn on another is refused.
-    run_ok(&db, &["import", shared_instance("area-two.json").to_str().expect("utf-8")]);
-    let e = run_err(&db, &["render", "--plan", &id.to_string(), "--building", "Area Two (synthetic)", "-o", "x.svg"]);
+    run_ok(
+        &db,
+        &[
+            "import",
+            shared_instance("area-two.json").to_str().expect("utf-8"),
+        ],
+    );
+    let e = run_err(
+        &db,
+        &[
+            "render",
+            "--plan",
+            &id.to_string(),
+            "--building",
+            "Area Two (synthetic)",
+            "-o",
+            "x.svg",
+        ],
+    );
     assert!(e.contains("belongs to building"), "{e}");
 }
 
@@ -422,8 +606,16 @@ fn team_plan_keeps_its_walks_as_plans() {
     let out = run_ok(
         &db,
         &[
-            "team-plan", "--building", &name, "--surveyor", "f0-c00:f0-c00:20", "--surveyor",
-            "f0-c15:f0-c15:20", "--algorithm", "greedy", "--json",
+            "team-plan",
+            "--building",
+            &name,
+            "--surveyor",
+            "f0-c00:f0-c00:20",
+            "--surveyor",
+            "f0-c15:f0-c15:20",
+            "--algorithm",
+            "greedy",
+            "--json",
         ],
     );
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");

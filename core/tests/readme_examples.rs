@@ -65,8 +65,18 @@ fn readme_examples_run_as_written() {
     let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
     let list = examples(&readme);
     assert!(list.len() >= 15, "the README's examples: {list:?}");
-    for cmd in ["demo", "plans show", "render --plan", "render --session", "render --team", "vertices"] {
-        assert!(list.iter().any(|l| l.starts_with(cmd)), "no `trailprint {cmd}` example");
+    for cmd in [
+        "demo",
+        "plans show",
+        "render --plan",
+        "render --session",
+        "render --team",
+        "vertices",
+    ] {
+        assert!(
+            list.iter().any(|l| l.starts_with(cmd)),
+            "no `trailprint {cmd}` example"
+        );
     }
 
     // A working directory where `core/...` is the repository's, and outputs stay private.

@@ -41,7 +41,11 @@ impl Heat {
             noise.push(kernel.sn2 + smp.extra_noise);
         }
         let gp = GpModel::fit_with_noise(&kernel, &train, &noise, &DMatrix::zeros(train.len(), 0))?;
-        let sd: Vec<f64> = gp.variance(&grid).iter().map(|v| v.max(0.0).sqrt()).collect();
+        let sd: Vec<f64> = gp
+            .variance(&grid)
+            .iter()
+            .map(|v| v.max(0.0).sqrt())
+            .collect();
         let lo = sd.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = sd.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let (lo, hi) = if lo.is_finite() && hi.is_finite() {

@@ -294,7 +294,12 @@ pub(super) fn track(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
 
 /// Sample positions of this floor.
 pub(super) fn samples(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
-    for p in scene.samples.iter().map(|s| s.pos).filter(|p| p.floor == floor) {
+    for p in scene
+        .samples
+        .iter()
+        .map(|s| s.pos)
+        .filter(|p| p.floor == floor)
+    {
         let _ = writeln!(
             s,
             r#"<circle class="sample" cx="{:.1}" cy="{:.1}" r="2"/>"#,
@@ -358,7 +363,14 @@ pub(super) fn markers(
             );
             placer.block(x - 9.0, y - 9.0, 18.0, 18.0);
             if first == last {
-                let text = format!("start = end{}", if team { format!(" ({})", wi + 1) } else { String::new() });
+                let text = format!(
+                    "start = end{}",
+                    if team {
+                        format!(" ({})", wi + 1)
+                    } else {
+                        String::new()
+                    }
+                );
                 if let Some((tx, ty)) = placer.place(x + 6.0, y, text.chars().count(), 10.0) {
                     let _ = writeln!(
                         s,
@@ -414,7 +426,11 @@ pub(super) fn step_numbers(
             let _ = writeln!(
                 s,
                 r#"<text class="step" x="{tx:.1}" y="{ty:.1}"><title>step {} at {}</title>{text}</text>"#,
-                steps.iter().map(usize::to_string).collect::<Vec<_>>().join(", "),
+                steps
+                    .iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 esc(&building.vertices[v].id)
             );
         }

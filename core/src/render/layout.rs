@@ -173,7 +173,8 @@ impl Placer {
         for d in [4.0, 9.0, 15.0] {
             for (dx, dy) in [(d, -d - h), (d, d), (-d - w, -d - h), (-d - w, d)] {
                 let b = [x + dx, y + dy, x + dx + w, y + dy + h];
-                let inside = b[0] >= 0.0 && b[1] >= 0.0 && b[2] <= self.width && b[3] <= self.height;
+                let inside =
+                    b[0] >= 0.0 && b[1] >= 0.0 && b[2] <= self.width && b[3] <= self.height;
                 if inside && self.free(b) {
                     self.taken.push(b);
                     return Some((b[0] + 1.0, b[3] - 2.5));

@@ -105,7 +105,8 @@ impl Legend {
                 o.kind == kind || (kind == OutlineKind::Corridor && o.kind == OutlineKind::Area)
             }) {
                 let shape = if kind == OutlineKind::Wall {
-                    r#"<line class="outline outline-wall" x1="-9" y1="0" x2="9" y2="0"/>"#.to_string()
+                    r#"<line class="outline outline-wall" x1="-9" y1="0" x2="9" y2="0"/>"#
+                        .to_string()
                 } else {
                     format!(
                         r#"<rect class="outline outline-{}" x="-9" y="-6" width="18" height="12"/>"#,
@@ -128,7 +129,10 @@ impl Legend {
     /// Height of the legend, pixels.
     pub fn height(&self, heat: Option<&Heat>) -> f64 {
         let rows = self.entries.len().div_ceil(self.columns);
-        rows as f64 * ENTRY_H + 10.0 + if heat.is_some() { BAR_BLOCK_H } else { 0.0 } + SCALE_BLOCK_H
+        rows as f64 * ENTRY_H
+            + 10.0
+            + if heat.is_some() { BAR_BLOCK_H } else { 0.0 }
+            + SCALE_BLOCK_H
     }
 
     /// Draws the legend with its top at `top`.
@@ -159,11 +163,7 @@ impl Legend {
             let _ = writeln!(s, r#"<defs><linearGradient id="sd-scale">"#);
             for i in 0..=8 {
                 let t = f64::from(i) / 8.0;
-                let _ = writeln!(
-                    s,
-                    r#"<stop offset="{t:.3}" stop-color="{}"/>"#,
-                    viridis(t)
-                );
+                let _ = writeln!(s, r#"<stop offset="{t:.3}" stop-color="{}"/>"#, viridis(t));
             }
             let _ = writeln!(s, "</linearGradient></defs>");
             let _ = writeln!(

@@ -166,11 +166,21 @@ fn floor_note(building: &Building, scene: &Scene, floor: i64) -> Option<String> 
     let rank = order.iter().position(|&f| f == floor).map_or(0, |r| r + 1);
     let list: Vec<String> = runs
         .iter()
-        .map(|&(a, b)| if a == b { a.to_string() } else { format!("{a}-{b}") })
+        .map(|&(a, b)| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}-{b}")
+            }
+        })
         .collect();
     let steps = format!(
         "step{} {}",
-        if runs.len() == 1 && runs[0].0 == runs[0].1 { "" } else { "s" },
+        if runs.len() == 1 && runs[0].0 == runs[0].1 {
+            ""
+        } else {
+            "s"
+        },
         list.join(", ")
     );
     Some(if order.len() > 1 {

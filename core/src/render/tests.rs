@@ -77,11 +77,18 @@ fn walk_samples_and_heat_map() {
     // c02 -> c03 -> c02: that edge is walked there and back, drawn as two lanes.
     assert_eq!(count(&svg, " repeat\""), 2);
     assert_eq!(count(&svg, "class=\"arrow\""), ids.len() - 1);
-    assert_eq!(count(&svg, "class=\"sample\""), samples.len() + 1, "and the legend's");
+    assert_eq!(
+        count(&svg, "class=\"sample\""),
+        samples.len() + 1,
+        "and the legend's"
+    );
     let grid = reference_grid(&b, 0.5, 1.5);
     assert_eq!(count(&svg, "class=\"heat\""), grid.len());
     let labels = count(&svg, "class=\"label\"");
-    assert!(labels > b.len() / 2 && labels <= b.len(), "{labels} vertex ids placed");
+    assert!(
+        labels > b.len() / 2 && labels <= b.len(),
+        "{labels} vertex ids placed"
+    );
     // One marker each on the map, plus the legend's swatches.
     assert_eq!(count(&svg, "class=\"start\""), 2);
     assert_eq!(count(&svg, "class=\"end\""), 2);
@@ -150,7 +157,9 @@ fn start_equal_to_end_has_both_markers_and_a_long_strip_is_cut_into_rows() {
     ))
     .expect("area-two");
     let b = Building::from_json(&text, "area-two").expect("valid");
-    let walk = b.resolve_walk(&["b00", "b01", "b02", "b01", "b00"]).expect("walk");
+    let walk = b
+        .resolve_walk(&["b00", "b01", "b02", "b01", "b00"])
+        .expect("walk");
     let svg = render_svg(&b, &Scene::one_walk(walk, "w"), &RenderOptions::default()).expect("svg");
     assert_balanced(&svg);
     assert!(svg.contains("<title>start: b00</title>") && svg.contains("<title>end: b00</title>"));
@@ -176,12 +185,20 @@ fn start_equal_to_end_has_both_markers_and_a_long_strip_is_cut_into_rows() {
 #[test]
 fn team_walks_get_one_colour_each() {
     let b = demo();
-    let w1 = b.resolve_walk(&["f0-c00", "f0-c01", "f0-c02"]).expect("walk");
+    let w1 = b
+        .resolve_walk(&["f0-c00", "f0-c01", "f0-c02"])
+        .expect("walk");
     let w2 = b.resolve_walk(&["f0-c02", "f0-c01"]).expect("walk");
     let scene = Scene {
         walks: vec![
-            WalkLayer { walk: w1, name: "surveyor 1".into() },
-            WalkLayer { walk: w2, name: "surveyor 2".into() },
+            WalkLayer {
+                walk: w1,
+                name: "surveyor 1".into(),
+            },
+            WalkLayer {
+                walk: w2,
+                name: "surveyor 2".into(),
+            },
         ],
         ..Scene::default()
     };
@@ -190,7 +207,10 @@ fn team_walks_get_one_colour_each() {
     assert_eq!(count(&svg, "class=\"walk walk-0"), 2);
     assert_eq!(count(&svg, "class=\"walk walk-1"), 1);
     assert_ne!(style::walk_colour(0), style::walk_colour(1));
-    assert!(svg.contains(&format!("walk-1 repeat\" stroke=\"{}\"", style::walk_colour(1))));
+    assert!(svg.contains(&format!(
+        "walk-1 repeat\" stroke=\"{}\"",
+        style::walk_colour(1)
+    )));
     assert!(svg.contains(">S1</text>") && svg.contains(">E2</text>"));
     // f0-c01 - f0-c02 is walked by both: two lanes.
     assert_eq!(count(&svg, " repeat\""), 2);

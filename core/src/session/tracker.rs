@@ -1033,7 +1033,13 @@ impl Tracker {
             g.next_check_in = Some(b.vertices[self.route[k]].id.clone());
             g.distance_to_check_in_m = (self.arc[k] - a).max(0.0);
         }
-        g.message = guidance_sentence(g.distance_m, &v.id, v.label.as_deref(), g.turn, g.check_in_at_next);
+        g.message = guidance_sentence(
+            g.distance_m,
+            &v.id,
+            v.label.as_deref(),
+            g.turn,
+            g.check_in_at_next,
+        );
         g
     }
 

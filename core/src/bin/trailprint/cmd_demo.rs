@@ -146,13 +146,19 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     };
     println!();
     println!("next steps:");
-    println!("  trailprint{db_opt} render --plan {plan_id} -o demo-plan.svg     draw the walk on the map");
-    println!("  trailprint{db_opt} plans show {plan_id} --instructions          the turn-by-turn sheet");
+    println!(
+        "  trailprint{db_opt} render --plan {plan_id} -o demo-plan.svg     draw the walk on the map"
+    );
+    println!(
+        "  trailprint{db_opt} plans show {plan_id} --instructions          the turn-by-turn sheet"
+    );
     println!(
         "  trailprint{db_opt} simulate --building {name} --start {start} --end {end} --budget {} --surveyor human",
         a.budget
     );
-    println!("                                                   walk it with a simulated surveyor");
+    println!(
+        "                                                   walk it with a simulated surveyor"
+    );
     println!("  trailprint{db_opt} vertices {name}       pick another start and end");
     Ok(())
 }

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use trailprint::samples::SurveyorModel;
-use trailprint::store::{BuildingRef, StoredPlan, Store};
+use trailprint::store::{BuildingRef, Store, StoredPlan};
 use trailprint::{Error, Result};
 
 use crate::opts::json_line;
@@ -153,18 +153,44 @@ fn list(name: Option<&str>, json: bool, db: Option<&Path>) -> Result<()> {
         .iter()
         .map(|r| format!("{} -> {}", printable(r.start), printable(r.end)))
         .collect();
-    let nw = names.iter().map(|n| n.chars().count()).max().unwrap_or(8).max(8);
-    let ew = ends.iter().map(|n| n.chars().count()).max().unwrap_or(5).max(5);
+    let nw = names
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(8)
+        .max(8);
+    let ew = ends
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(5);
     println!(
         "{:>4}  {:<nw$}  {:<ew$}  {:>8} {:>8} {:>7} {:>9}  {:<16} {:<8} {}",
-        "id", "building", "route", "budget_m", "length_m", "samples", "utility", "algorithm",
-        "surveyor", "created (UTC)"
+        "id",
+        "building",
+        "route",
+        "budget_m",
+        "length_m",
+        "samples",
+        "utility",
+        "algorithm",
+        "surveyor",
+        "created (UTC)"
     );
     for ((r, n), e) in rows.iter().zip(&names).zip(&ends) {
         println!(
             "{:>4}  {:<nw$}  {:<ew$}  {:>8.1} {:>8.1} {:>7} {:>9.3}  {:<16} {:<8} {}",
-            r.id, n, e, r.budget_m, r.length_m, r.samples, r.utility_nats, r.algorithm,
-            r.surveyor, r.created
+            r.id,
+            n,
+            e,
+            r.budget_m,
+            r.length_m,
+            r.samples,
+            r.utility_nats,
+            r.algorithm,
+            r.surveyor,
+            r.created
         );
     }
     println!("\n(utility in nats; `trailprint plans show ID` prints a plan's walk)");
@@ -177,7 +203,12 @@ pub fn load_plan(store: &Store, id: i64) -> Result<StoredPlan> {
         Err(Error::NotFound(_)) => {
             let mut ids = Vec::new();
             for b in store.list_buildings()? {
-                ids.extend(store.list_plans(BuildingRef::Id(b.id))?.iter().map(|p| p.id));
+                ids.extend(
+                    store
+                        .list_plans(BuildingRef::Id(b.id))?
+                        .iter()
+                        .map(|p| p.id),
+                );
             }
             ids.sort_unstable();
             let db = store
@@ -186,7 +217,13 @@ pub fn load_plan(store: &Store, id: i64) -> Result<StoredPlan> {
             Err(Error::NotFound(if ids.is_empty() {
                 format!("no plan {id}: the database {db} holds no plans")
             } else {
-                let shown: Vec<String> = ids.iter().rev().take(10).rev().map(i64::to_string).collect();
+                let shown: Vec<String> = ids
+                    .iter()
+                    .rev()
+                    .take(10)
+                    .rev()
+                    .map(i64::to_string)
+                    .collect();
                 format!(
                     "no plan {id} in {db}; plan ids there: {}{} (`trailprint plans` lists them)",
                     if ids.len() > 10 { "..., " } else { "" },
@@ -244,7 +281,10 @@ fn show(a: &ShowArgs, db: Option<&Path>) -> Result<()> {
     );
     println!("created       {} UTC", utc_text(r.created_ms));
     println!("walk          {}", r.walk.join(","));
-    println!("length        {:.1} m of the {} m budget", r.length_m, r.budget_m);
+    println!(
+        "length        {:.1} m of the {} m budget",
+        r.length_m, r.budget_m
+    );
     println!(
         "samples       {} ({})",
         r.samples,

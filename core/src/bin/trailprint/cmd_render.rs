@@ -58,7 +58,12 @@ pub struct Args {
 }
 
 /// The building of a stored plan or session, checked against `--building` if given.
-fn stored_building(store: &Store, building_id: i64, given: Option<&str>, what: &str) -> Result<Building> {
+fn stored_building(
+    store: &Store,
+    building_id: i64,
+    given: Option<&str>,
+    what: &str,
+) -> Result<Building> {
     let b = store.get_building(BuildingRef::Id(building_id))?;
     if let Some(spec) = given
         && !is_file_spec(spec)
@@ -102,7 +107,12 @@ struct Source {
 fn from_plan(id: i64, a: &Args, db: Option<&Path>) -> Result<Source> {
     let store = open_store(db)?;
     let p = crate::cmd_plans::load_plan(&store, id)?;
-    let b = stored_building(&store, p.building_id, a.building.as_deref(), &format!("plan {id}"))?;
+    let b = stored_building(
+        &store,
+        p.building_id,
+        a.building.as_deref(),
+        &format!("plan {id}"),
+    )?;
     let walk = b.resolve_walk(&p.record.walk)?;
     let mut scene = Scene::one_walk(walk, &format!("plan {id}, {:.1} m", p.record.length_m));
     scene.caption = Some(plan_caption(&p));
@@ -119,7 +129,12 @@ fn from_session(id: i64, a: &Args, db: Option<&Path>) -> Result<Source> {
     let store = Arc::new(open_store(db)?);
     let log: Arc<dyn SessionLog> = store.clone();
     let session = Session::replay_to(log, id, i64::MAX)?;
-    let b = stored_building(&store, session.building_id(), a.building.as_deref(), &format!("session {id}"))?;
+    let b = stored_building(
+        &store,
+        session.building_id(),
+        a.building.as_deref(),
+        &format!("session {id}"),
+    )?;
     let plan = store.load_plan(session.plan_id())?;
     let walk = b.resolve_walk(&plan.record.walk)?;
     // The track: every position the session knew, in order (check-ins at their vertex,
@@ -186,7 +201,12 @@ fn from_team(a: &Args, db: Option<&Path>) -> Result<Source> {
             }
             let Some(st) = store.as_ref() else { continue };
             let p = crate::cmd_plans::load_plan(st, id)?;
-            let b = stored_building(st, p.building_id, a.building.as_deref(), &format!("plan {id}"))?;
+            let b = stored_building(
+                st,
+                p.building_id,
+                a.building.as_deref(),
+                &format!("plan {id}"),
+            )?;
             if let Some(prev) = &building
                 && prev.name != b.name
             {

@@ -43,7 +43,9 @@ pub fn run(a: &Args, db: Option<&Path>) -> Result<()> {
         .filter(|(_, v)| {
             needle.as_ref().is_none_or(|n| {
                 v.id.to_lowercase().contains(n)
-                    || v.label.as_ref().is_some_and(|l| l.to_lowercase().contains(n))
+                    || v.label
+                        .as_ref()
+                        .is_some_and(|l| l.to_lowercase().contains(n))
             })
         })
         .map(|(i, v)| Row {
@@ -74,14 +76,28 @@ pub fn run(a: &Args, db: Option<&Path>) -> Result<()> {
             String::new()
         }
     );
-    let idw = rows.iter().map(|r| printable(&r.id).chars().count()).max().unwrap_or(2).max(2);
+    let idw = rows
+        .iter()
+        .map(|r| printable(&r.id).chars().count())
+        .max()
+        .unwrap_or(2)
+        .max(2);
     let lw = rows
         .iter()
-        .map(|r| r.label.as_deref().map_or(1, |l| printable(l).chars().count()))
+        .map(|r| {
+            r.label
+                .as_deref()
+                .map_or(1, |l| printable(l).chars().count())
+        })
         .max()
         .unwrap_or(5)
         .clamp(5, 30);
-    let fw = rows.iter().map(|r| r.floor_name.chars().count()).max().unwrap_or(5).max(5);
+    let fw = rows
+        .iter()
+        .map(|r| r.floor_name.chars().count())
+        .max()
+        .unwrap_or(5)
+        .max(5);
     println!(
         "{:<idw$}  {:<lw$}  {:<fw$}  {:>9} {:>9}  neighbours",
         "id", "label", "floor", "x_m", "y_m"
@@ -101,7 +117,11 @@ pub fn run(a: &Args, db: Option<&Path>) -> Result<()> {
             r.floor_name,
             r.x,
             r.y,
-            r.neighbours.iter().map(|n| printable(n)).collect::<Vec<_>>().join(",")
+            r.neighbours
+                .iter()
+                .map(|n| printable(n))
+                .collect::<Vec<_>>()
+                .join(",")
         );
     }
     Ok(())

@@ -228,7 +228,13 @@ pub fn walking_speed(model: &SurveyorModel, fallback_speed: f64) -> f64 {
 
 /// "about 2 min 16 s at 1.2 m/s, plus 2 s at each of 7 check-ins" for a walk of
 /// `length_m`.
-pub fn time_text(b: &Building, walk: &[usize], length_m: f64, model: &SurveyorModel, speed: f64) -> String {
+pub fn time_text(
+    b: &Building,
+    walk: &[usize],
+    length_m: f64,
+    model: &SurveyorModel,
+    speed: f64,
+) -> String {
     let checks = check_ins(b, walk, model).iter().filter(|&&c| c).count();
     let walking = length_m / speed;
     match model {
@@ -252,7 +258,10 @@ pub fn print_walk(
     instructions_sheet: bool,
 ) {
     let speed = walking_speed(model, fallback_speed);
-    println!("time          {}", time_text(b, walk, length_m, model, speed));
+    println!(
+        "time          {}",
+        time_text(b, walk, length_m, model, speed)
+    );
     if instructions_sheet {
         println!();
         for l in instructions(b, walk, model) {
