@@ -166,7 +166,7 @@ fn list(name: Option<&str>, json: bool, db: Option<&Path>) -> Result<()> {
         .unwrap_or(5)
         .max(5);
     println!(
-        "{:>4}  {:<nw$}  {:<ew$}  {:>8} {:>8} {:>7} {:>9}  {:<16} {:<8} {}",
+        "{:>4}  {:<nw$}  {:<ew$}  {:>8} {:>8} {:>7} {:>9}  {:<16} {:<8} created (UTC)",
         "id",
         "building",
         "route",
@@ -176,7 +176,6 @@ fn list(name: Option<&str>, json: bool, db: Option<&Path>) -> Result<()> {
         "utility",
         "algorithm",
         "surveyor",
-        "created (UTC)"
     );
     for ((r, n), e) in rows.iter().zip(&names).zip(&ends) {
         println!(
