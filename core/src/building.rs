@@ -284,6 +284,17 @@ impl BuildingFile {
     /// object: an array, or anything after the document (a second document, stray text), is
     /// refused rather than silently dropped.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        if let Some(what) = not_json_object(text) {
+            return Err(Error::Parse {
+                origin: origin.to_string(),
+                path: "$".into(),
+                message: format!(
+                    "not a JSON survey-building/1 file: {what} (a building file is one JSON \
+                     object, `{{\"format\": \"survey-building/1\", ...}}`; floor plans are \
+                     read by `trailprint import-floorplan`)"
+                ),
+            });
+        }
         let de = &mut serde_json::Deserializer::from_str(text);
         let file: Self = serde_path_to_error::deserialize(&mut *de)
             .map(|o: shape::Object<Self>| o.0)
@@ -752,8 +763,63 @@ impl Building {
     /// Index of the vertex with this id, or an error naming it.
     pub fn require_vertex(&self, id: &str) -> Result<usize> {
         self.vertex_index(id).ok_or_else(|| {
-            Error::InvalidRequest(format!("unknown vertex {id:?} in building {:?}", self.name))
+            Error::InvalidRequest(format!(
+                "unknown vertex {id:?} in building {:?}{}",
+                self.name,
+                self.did_you_mean(id)
+            ))
         })
+    }
+
+    /// The vertex ids nearest to `id` (edit distance, ignoring case), as the tail of an
+    /// "unknown vertex" message: `; did you mean "c00" or "c01"?`, or empty when no id is
+    /// close (a typo of one or two characters, or a third of the id).
+    pub fn similar_vertex_ids(&self, id: &str) -> Vec<&str> {
+        let want: Vec<char> = id.to_lowercase().chars().collect();
+        let limit = (want.len() / 3).max(2);
+        let mut scored: Vec<(usize, &str)> = self
+            .vertices
+            .iter()
+            .map(|v| {
+                let have: Vec<char> = v.id.to_lowercase().chars().collect();
+                let d = edit_distance(&want, &have);
+                // Replacing the whole id is no near miss ("q" is not a typo of "a").
+                let whole = d >= want.len().max(have.len());
+                (if whole { usize::MAX } else { d }, v.id.as_str())
+            })
+            .filter(|&(d, _)| d <= limit)
+            .collect();
+        scored.sort();
+        let best = scored.first().map_or(0, |s| s.0);
+        let near: Vec<&str> = scored
+            .into_iter()
+            .filter(|&(d, _)| d == best)
+            .map(|(_, v)| v)
+            .collect();
+        // Many ids equally far away (every "b.." of a corridor two edits from "c0") is
+        // no suggestion at all.
+        if near.len() > 3 && best > 1 {
+            return Vec::new();
+        }
+        near.into_iter().take(3).collect()
+    }
+
+    fn did_you_mean(&self, id: &str) -> String {
+        let near = self.similar_vertex_ids(id);
+        let quoted: Vec<String> = near.iter().map(|v| format!("{v:?}")).collect();
+        match quoted.as_slice() {
+            [] => match (self.vertices.first(), self.vertices.last()) {
+                (Some(a), Some(b)) if self.len() > 1 => format!(
+                    "; its {} vertex ids run from {:?} to {:?}",
+                    self.len(),
+                    a.id,
+                    b.id
+                ),
+                _ => String::new(),
+            },
+            [one] => format!("; did you mean {one}?"),
+            [init @ .., last] => format!("; did you mean {} or {last}?", init.join(", ")),
+        }
     }
 
     /// Neighbours of `v` with the joining edge index, sorted by neighbour index.
@@ -798,7 +864,7 @@ impl Building {
             let id = id.as_ref().trim();
             let v = self.vertex_index(id).ok_or_else(|| Error::InvalidWalk {
                 step,
-                message: format!("unknown vertex {id:?}"),
+                message: format!("unknown vertex {id:?}{}", self.did_you_mean(id)),
             })?;
             if let Some(&prev) = walk.last()
                 && self.edge_between(prev, v).is_none()
@@ -845,6 +911,41 @@ impl Building {
 /// Whether a coordinate is finite and within [`MAX_COORDINATE`] of the origin.
 fn coordinate_ok(v: f64) -> bool {
     v.is_finite() && v.abs() <= MAX_COORDINATE
+}
+
+/// Levenshtein distance of two strings (as characters).
+fn edit_distance(a: &[char], b: &[char]) -> usize {
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != cb);
+            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// Why `text` cannot be a building file at first sight (empty, or its first character
+/// cannot start a JSON document: CSV, Markdown, plain text), or `None` when JSON parsing
+/// should judge it (a `[` or `{` document; its errors carry a JSON path).
+fn not_json_object(text: &str) -> Option<String> {
+    let trimmed = text.trim_start_matches(['\u{feff}', ' ', '\t', '\r', '\n']);
+    if trimmed.is_empty() {
+        return Some("the file is empty".into());
+    }
+    if trimmed.starts_with(['{', '[']) {
+        return None;
+    }
+    let first: String = trimmed
+        .lines()
+        .next()
+        .unwrap_or("")
+        .chars()
+        .take(40)
+        .collect();
+    Some(format!("it begins with {first:?}"))
 }
 
 /// Whether an RSS value is a finite dBm value in [[`MIN_RSS_DBM`], [`MAX_RSS_DBM`]], the one

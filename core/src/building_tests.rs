@@ -405,7 +405,14 @@ fn walks_are_resolved_and_checked() {
         .resolve_walk(&["a", "q"])
         .expect_err("unknown")
         .to_string();
-    assert_eq!(e, "invalid walk at step 1: unknown vertex \"q\"");
+    // No id is a near miss of a one-letter id: the message says what the ids look like.
+    assert!(
+        e.starts_with("invalid walk at step 1: unknown vertex \"q\"; its ")
+            && e.contains(" vertex ids run from \"a\" to "),
+        "{e}"
+    );
+    let near = b.similar_vertex_ids("A");
+    assert_eq!(near, vec!["a"], "case is ignored");
 }
 
 #[test]

@@ -92,7 +92,12 @@ fn generate_evaluate_render() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&svg).expect("svg written");
     assert_eq!(text.matches("class=\"floor\"").count(), 2);
-    assert_eq!(text.matches("<polyline").count(), 2, "one run per floor");
+    // The walk is drawn on both floors, which say in which order they are walked.
+    assert!(text.matches("class=\"walk walk-0").count() >= 2);
+    assert!(
+        text.contains("walked 1st") && text.contains("walked 2nd"),
+        "floor order"
+    );
     assert!(text.trim_end().ends_with("</svg>"));
 }
 

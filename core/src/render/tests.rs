@@ -1,6 +1,7 @@
 //! Rendering tests: the SVG is well formed and holds what was asked for.
 
 use super::*;
+use crate::eval::reference_grid;
 use crate::samples::{SurveyorModel, sample_walk};
 use crate::synth::DEMO_BUILDING_JSON;
 
@@ -41,9 +42,10 @@ fn building_alone_has_one_element_per_edge_vertex_and_pilot() {
     let svg = render_svg(&b, &Scene::default(), &RenderOptions::default()).expect("svg");
     assert_balanced(&svg);
     assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""));
-    assert_eq!(count(&svg, "class=\"edge\""), b.edges.len());
-    assert_eq!(count(&svg, "class=\"vertex\""), b.len());
-    assert_eq!(count(&svg, "class=\"pilot\""), b.pilot.len());
+    // One element per edge, vertex and pilot location, plus the legend's swatch of each.
+    assert_eq!(count(&svg, "class=\"edge\""), b.edges.len() + 1);
+    assert_eq!(count(&svg, "class=\"vertex\""), b.len() + 1);
+    assert_eq!(count(&svg, "class=\"pilot\""), b.pilot.len() + 1);
     assert_eq!(count(&svg, "<polyline"), 0);
     assert_eq!(count(&svg, "class=\"heat\""), 0, "no kernel, no heat map");
     assert_eq!(count(&svg, "class=\"floor\""), 1);
@@ -57,9 +59,9 @@ fn walk_samples_and_heat_map() {
     let kernel = Kernel::new(60.0, 8.0, 4.0);
     let samples = sample_walk(&b, &walk, &SurveyorModel::robot(), &kernel).expect("samples");
     let scene = Scene {
-        walk,
         samples: samples.clone(),
         kernel: Some(kernel),
+        ..Scene::one_walk(walk, "planned walk")
     };
     let options = RenderOptions {
         labels: true,
@@ -67,14 +69,34 @@ fn walk_samples_and_heat_map() {
     };
     let svg = render_svg(&b, &scene, &options).expect("svg");
     assert_balanced(&svg);
-    assert_eq!(count(&svg, "<polyline"), 1, "one polyline per walk");
+    assert_eq!(
+        count(&svg, "class=\"walk walk-0"),
+        ids.len() - 1,
+        "one segment per step"
+    );
+    // c02 -> c03 -> c02: that edge is walked there and back, drawn as two lanes.
+    assert_eq!(count(&svg, " repeat\""), 2);
     assert_eq!(count(&svg, "class=\"arrow\""), ids.len() - 1);
-    assert_eq!(count(&svg, "class=\"sample\""), samples.len());
+    assert_eq!(
+        count(&svg, "class=\"sample\""),
+        samples.len() + 1,
+        "and the legend's"
+    );
     let grid = reference_grid(&b, 0.5, 1.5);
     assert_eq!(count(&svg, "class=\"heat\""), grid.len());
-    assert_eq!(count(&svg, "class=\"label\""), b.len() + 3); // ids + 3 legend texts
-    assert_eq!(count(&svg, "class=\"start\""), 1);
-    assert_eq!(count(&svg, "class=\"end\""), 1);
+    let labels = count(&svg, "class=\"label\"");
+    assert!(
+        labels > b.len() / 2 && labels <= b.len(),
+        "{labels} vertex ids placed"
+    );
+    // One marker each on the map, plus the legend's swatches.
+    assert_eq!(count(&svg, "class=\"start\""), 2);
+    assert_eq!(count(&svg, "class=\"end\""), 2);
+    // Step numbers: f0-c02 is reached at steps 3 and 5.
+    assert!(svg.contains(">3,5</text>"), "{svg}");
+    // The colour scale spans the values drawn.
+    assert!(svg.contains("posterior std. dev. of the RSS"));
+    assert!(svg.contains("class=\"scale-bar\""));
 }
 
 #[test]
@@ -95,23 +117,24 @@ fn one_panel_per_floor_and_stairs_markers() {
     let walk = b
         .resolve_walk(&["f0-c01", "f0-c00", "f1-c00", "f1-c01", "f1-c00", "f2-c00"])
         .expect("walk");
-    let scene = Scene {
-        walk,
-        ..Scene::default()
-    };
+    let scene = Scene::one_walk(walk, "planned walk");
     let svg = render_svg(&b, &scene, &RenderOptions::default()).expect("svg");
     assert_balanced(&svg);
     assert_eq!(count(&svg, "class=\"floor\""), 3);
     assert_eq!(
-        count(&svg, "<polyline"),
-        2,
-        "floor 0 and floor 1 runs; floor 2 is one vertex"
+        count(&svg, "class=\"walk walk-0"),
+        3,
+        "one segment on floor 0, two on floor 1; stairs are not drawn as segments"
     );
     assert_eq!(
         count(&svg, "class=\"stairs\""),
-        4,
-        "two staircases, two ends each"
+        4 + 1,
+        "two staircases, two ends each, and the legend's swatch"
     );
+    // Floors are named once and the order of the walk is said.
+    assert!(svg.contains("walked 1st: steps 1-2"), "{svg}");
+    assert!(svg.contains("walked 2nd: steps 3-5"), "{svg}");
+    assert!(svg.contains("stairs to Floor 1"), "{svg}");
 }
 
 #[test]
@@ -122,9 +145,73 @@ fn names_are_escaped_and_bad_walks_rejected() {
     let svg = render_svg(&b, &Scene::default(), &RenderOptions::default()).expect("svg");
     assert!(svg.contains("A &amp; B &lt;C&gt;"));
     assert_balanced(&svg);
+    let scene = Scene::one_walk(vec![0, 40], "bad");
+    assert!(render_svg(&b, &scene, &RenderOptions::default()).is_err());
+}
+
+#[test]
+fn start_equal_to_end_has_both_markers_and_a_long_strip_is_cut_into_rows() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/area-two.json"
+    ))
+    .expect("area-two");
+    let b = Building::from_json(&text, "area-two").expect("valid");
+    let walk = b
+        .resolve_walk(&["b00", "b01", "b02", "b01", "b00"])
+        .expect("walk");
+    let svg = render_svg(&b, &Scene::one_walk(walk, "w"), &RenderOptions::default()).expect("svg");
+    assert_balanced(&svg);
+    assert!(svg.contains("<title>start: b00</title>") && svg.contains("<title>end: b00</title>"));
+    assert!(svg.contains("start = end"));
+    // 63 m by 2.5 m: two rows of one floor drawing, not a 1460 x 250 strip.
+    assert_eq!(count(&svg, "<use "), 2);
+    assert!(svg.contains("part 2 of 2"));
+    let width: f64 = svg
+        .split("width=\"")
+        .nth(1)
+        .and_then(|w| w.split('"').next())
+        .and_then(|w| w.parse().ok())
+        .expect("width");
+    let height: f64 = svg
+        .split("height=\"")
+        .nth(1)
+        .and_then(|w| w.split('"').next())
+        .and_then(|w| w.parse().ok())
+        .expect("height");
+    assert!(width / height < 3.0, "{width} x {height}");
+}
+
+#[test]
+fn team_walks_get_one_colour_each() {
+    let b = demo();
+    let w1 = b
+        .resolve_walk(&["f0-c00", "f0-c01", "f0-c02"])
+        .expect("walk");
+    let w2 = b.resolve_walk(&["f0-c02", "f0-c01"]).expect("walk");
     let scene = Scene {
-        walk: vec![0, 40],
+        walks: vec![
+            WalkLayer {
+                walk: w1,
+                name: "surveyor 1".into(),
+            },
+            WalkLayer {
+                walk: w2,
+                name: "surveyor 2".into(),
+            },
+        ],
         ..Scene::default()
     };
-    assert!(render_svg(&b, &scene, &RenderOptions::default()).is_err());
+    let svg = render_svg(&b, &scene, &RenderOptions::default()).expect("svg");
+    assert_balanced(&svg);
+    assert_eq!(count(&svg, "class=\"walk walk-0"), 2);
+    assert_eq!(count(&svg, "class=\"walk walk-1"), 1);
+    assert_ne!(style::walk_colour(0), style::walk_colour(1));
+    assert!(svg.contains(&format!(
+        "walk-1 repeat\" stroke=\"{}\"",
+        style::walk_colour(1)
+    )));
+    assert!(svg.contains(">S1</text>") && svg.contains(">E2</text>"));
+    // f0-c01 - f0-c02 is walked by both: two lanes.
+    assert_eq!(count(&svg, " repeat\""), 2);
 }

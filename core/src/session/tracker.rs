@@ -130,6 +130,34 @@ fn checkins(b: &Building, route: &[usize], surveyor: &Surveyor) -> Vec<bool> {
     out
 }
 
+/// The sentence a surveyor reads for the next waypoint: "In 12 m at c33 (corridor): turn
+/// left; check in there." Shared by the live guidance of a session and the printed
+/// turn-by-turn sheet of `trailprint plan --instructions`, so both say the same thing.
+pub fn guidance_sentence(
+    distance_m: f64,
+    vertex: &str,
+    label: Option<&str>,
+    turn: Turn,
+    check_in: bool,
+) -> String {
+    let name = match label {
+        Some(l) => format!("{vertex} ({l})"),
+        None => vertex.to_string(),
+    };
+    let what = match turn {
+        Turn::Straight => "go straight on",
+        Turn::Left => "turn left",
+        Turn::Right => "turn right",
+        Turn::TurnBack => "turn back",
+        Turn::ChangeFloor => "change floor",
+        Turn::Arrive => "that is the end of the walk",
+    };
+    format!(
+        "In {distance_m:.0} m at {name}: {what}{}.",
+        if check_in { "; check in there" } else { "" }
+    )
+}
+
 /// The turn at `b` coming from `a`, going on to `c`.
 pub fn classify_turn(a: &Point, b: &Point, c: &Point) -> Turn {
     if a.floor != b.floor || b.floor != c.floor {
@@ -1005,26 +1033,12 @@ impl Tracker {
             g.next_check_in = Some(b.vertices[self.route[k]].id.clone());
             g.distance_to_check_in_m = (self.arc[k] - a).max(0.0);
         }
-        let name = match &v.label {
-            Some(l) => format!("{} ({l})", v.id),
-            None => v.id.clone(),
-        };
-        let what = match g.turn {
-            Turn::Straight => "go straight on",
-            Turn::Left => "turn left",
-            Turn::Right => "turn right",
-            Turn::TurnBack => "turn back",
-            Turn::ChangeFloor => "change floor",
-            Turn::Arrive => "that is the end of the walk",
-        };
-        g.message = format!(
-            "In {:.0} m at {name}: {what}{}.",
+        g.message = guidance_sentence(
             g.distance_m,
-            if g.check_in_at_next {
-                "; check in there"
-            } else {
-                ""
-            }
+            &v.id,
+            v.label.as_deref(),
+            g.turn,
+            g.check_in_at_next,
         );
         g
     }

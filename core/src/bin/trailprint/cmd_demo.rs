@@ -18,7 +18,7 @@ use crate::opts::{ModelOpts, json_line};
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Budget of the planned walk, metres.
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, allow_negative_numbers = true)]
     budget: f64,
     /// Planner (auto, greedy, genetic, recursive-greedy, ero, exact).
     #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
@@ -117,8 +117,10 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         kernel.sf2, kernel.ell, kernel.sn2
     );
     println!(
-        "request       {start} -> {end}, budget {} m, {:?}, {}",
-        a.budget, req.model, req.algorithm
+        "request       {start} -> {end}, budget {} m, {}, planner {}",
+        a.budget,
+        crate::walk_text::model_text(&req.model),
+        req.algorithm.name()
     );
     println!("plan id       {plan_id}");
     println!(
@@ -129,14 +131,34 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         "utility       {:.3} nats ({} ms)",
         result.utility_nats, result.elapsed_ms
     );
-    println!("walk:");
-    for (i, id) in result.walk.iter().enumerate() {
-        let label = building
-            .vertex_index(id)
-            .and_then(|v| building.vertices[v].label.clone())
-            .map(|l| format!("  ({l})"))
-            .unwrap_or_default();
-        println!("  {:3}  {id}{label}", i + 1);
-    }
+    crate::walk_text::print_walk(
+        &building,
+        &result.walk_indices,
+        result.length_m,
+        &req.model,
+        a.model.speed,
+        false,
+    );
+    let name = format!("{:?}", building.name);
+    let db_opt = match db {
+        Some(p) => format!(" --db {:?}", p.display().to_string()),
+        None => String::new(),
+    };
+    println!();
+    println!("next steps:");
+    println!(
+        "  trailprint{db_opt} render --plan {plan_id} -o demo-plan.svg     draw the walk on the map"
+    );
+    println!(
+        "  trailprint{db_opt} plans show {plan_id} --instructions          the turn-by-turn sheet"
+    );
+    println!(
+        "  trailprint{db_opt} simulate --building {name} --start {start} --end {end} --budget {} --surveyor human",
+        a.budget
+    );
+    println!(
+        "                                                   walk it with a simulated surveyor"
+    );
+    println!("  trailprint{db_opt} vertices {name}       pick another start and end");
     Ok(())
 }

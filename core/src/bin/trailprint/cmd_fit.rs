@@ -3,6 +3,7 @@
 use clap::Args as ClapArgs;
 use trailprint::Result;
 use trailprint::gp::fit_kernel;
+use trailprint::store::{FitRecord, now_ms};
 
 use crate::opts::{BuildingOpts, json_line};
 
@@ -18,6 +19,15 @@ pub struct Args {
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = a.building.load(db)?;
     let fit = fit_kernel(&b.pilot)?;
+    // A building of the database keeps its fit there (`trailprint buildings` counts it;
+    // `demo` reuses the latest); a file has nowhere to keep it.
+    let fit_id = if crate::store_cli::is_file_spec(&a.building.building) {
+        None
+    } else {
+        let store = crate::store_cli::open_store(db)?;
+        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+        Some(store.record_fit(bref, &FitRecord::from_fit(&fit, now_ms()))?)
+    };
     if a.json {
         let out = serde_json::json!({
             "building": b.name,
@@ -27,6 +37,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "log_likelihood": fit.log_likelihood,
             "aps_used": fit.aps_used,
             "locations": fit.locations,
+            "fit_id": fit_id,
         });
         println!("{}", json_line(&out)?);
     } else {
@@ -41,6 +52,10 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             fit.aps_used.join(", ")
         );
         println!("locations       {}", fit.locations);
+        match fit_id {
+            Some(id) => println!("stored          as fit {id} of this building in the database"),
+            None => println!("stored          no (a file; import it to keep fits and plans)"),
+        }
     }
     Ok(())
 }

@@ -44,7 +44,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Stop after this many seconds with the best walk so far (auto: 2 s by default).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     #[command(flatten)]
     model: ModelOpts,
@@ -57,6 +57,10 @@ pub struct Args {
     /// Show progress on stderr even when it is not a terminal (one line every 0.5 s).
     #[arg(long)]
     progress: bool,
+    /// Print a turn-by-turn sheet to walk with (the sentences of a session's live
+    /// guidance) instead of the table of steps.
+    #[arg(long)]
+    instructions: bool,
     /// Print the result as one JSON object.
     #[arg(long)]
     json: bool,
@@ -68,8 +72,8 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let (kernel, source) = a.kernel.resolve(&b)?;
     let time_limit = crate::opts::time_limit(a.time_limit)?;
     let req = PlanRequest {
-        start: a.route.start,
-        end: a.route.end,
+        start: a.route.start.clone(),
+        end: a.route.end.clone(),
         budget: a.route.budget,
         model,
         kernel,
@@ -123,20 +127,55 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         println!("building      {}", crate::store_cli::printable(&b.name));
         println!("algorithm     {}", r.algorithm);
         println!(
+            "route         {} -> {}",
+            crate::store_cli::printable(&a.route.start),
+            crate::store_cli::printable(&a.route.end)
+        );
+        println!(
             "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",
             kernel.sf2, kernel.ell, kernel.sn2
         );
         println!("walk          {}", r.walk.join(","));
-        println!("length        {:.3} m of {} m", r.length_m, r.budget_m);
-        println!("samples       {}", r.samples);
-        println!("utility       {:.6} nats", r.utility_nats);
-        println!("elapsed       {} ms", r.elapsed_ms);
-        println!("termination   {}", r.termination.name());
-        if let Some(o) = r.optimal {
-            println!("optimal       {o}");
-        }
-        if let Some(n) = r.nodes {
-            println!("nodes         {n}");
+        println!(
+            "length        {:.1} m of the {} m budget",
+            r.length_m, r.budget_m
+        );
+        println!(
+            "samples       {} ({})",
+            r.samples,
+            crate::walk_text::model_text(&model)
+        );
+        println!(
+            "utility       {:.3} nats (mutual information of the samples and the radio map)",
+            r.utility_nats
+        );
+        let optimal = match r.optimal {
+            Some(true) => ", proven optimal",
+            Some(false) => ", not proven optimal",
+            None => "",
+        };
+        println!(
+            "planning      {} ms, {}{optimal}{}",
+            r.elapsed_ms,
+            r.termination.name(),
+            r.nodes
+                .map(|n| format!(", {n} search nodes"))
+                .unwrap_or_default()
+        );
+        crate::walk_text::print_walk(
+            &b,
+            &r.walk_indices,
+            r.length_m,
+            &model,
+            a.model.speed,
+            a.instructions,
+        );
+        if let Some(id) = plan_id {
+            println!();
+            println!(
+                "next          trailprint render --plan {id} -o plan-{id}.svg   (draw it)\n              \
+                 trailprint plans show {id} --instructions   (the sheet to walk with)"
+            );
         }
     }
     Ok(())

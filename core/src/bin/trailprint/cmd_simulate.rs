@@ -51,7 +51,7 @@ pub struct Args {
     #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Time limit of the initial plan, seconds (auto: 2 s by default).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     /// Planner of replans: `session-greedy` (fast, deterministic) or a planner name.
     #[arg(long, default_value = "session-greedy")]
@@ -215,7 +215,7 @@ fn open(a: &Args, db: Option<&Path>) -> Result<(Arc<Store>, Building, i64, Strin
     if is_file_spec(spec) {
         let b = a.building.load(db)?;
         let (store, where_) = match db {
-            Some(p) => (Store::open(p)?, p.display().to_string()),
+            Some(p) => (open_store(Some(p))?, p.display().to_string()),
             None => (Store::open_in_memory()?, "memory".to_string()),
         };
         let id = match store.building_info(BuildingRef::Name(&b.name)) {

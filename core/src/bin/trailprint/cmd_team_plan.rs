@@ -6,6 +6,7 @@ use std::sync::Arc;
 use clap::Args as ClapArgs;
 use trailprint::Result;
 use trailprint::plan::{Algorithm, PlanRequest};
+use trailprint::store::PlanRecord;
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
 
 use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
@@ -64,6 +65,24 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         rounds: a.rounds,
     };
     let team = plan_team(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
+    // A building of the database keeps each surveyor's walk as a plan, so that
+    // `plans show ID` and `render --team ID --team ID` find them; a file has nowhere.
+    let plan_ids: Vec<i64> = if crate::store_cli::is_file_spec(&a.building.building) {
+        Vec::new()
+    } else {
+        let store = crate::store_cli::open_store(db)?;
+        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+        let now = trailprint::store::now_ms();
+        let mut ids = Vec::new();
+        for (task, p) in req.surveyors.iter().zip(&team.plans) {
+            let mut one = req.base.clone();
+            one.start = task.start.clone();
+            one.end = task.end.clone();
+            one.budget = task.budget;
+            ids.push(store.save_plan(bref, &PlanRecord::from_plan(&one, p, now))?);
+        }
+        ids
+    };
     if a.json {
         let out = serde_json::json!({
             "walks": team.plans.iter().map(|p| p.walk.clone()).collect::<Vec<_>>(),
@@ -75,6 +94,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "rounds_used": team.rounds_used,
             "conditioned_on_collected": prior.len(),
             "kernel": kernel,
+            "plan_ids": plan_ids,
         });
         println!("{}", json_line(&out)?);
     } else {
@@ -91,9 +111,13 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         }
         for (i, p) in team.plans.iter().enumerate() {
             println!(
-                "surveyor {}      {:.1} m, {} samples, {:.3} nats alone: {}",
+                "surveyor {}      {}{:.1} m, {} samples, {:.3} nats alone: {}",
                 i + 1,
-                p.length_m,
+                plan_ids
+                    .get(i)
+                    .map(|id| format!("plan {id}, "))
+                    .unwrap_or_default(),
+                p.length_m + 0.0, // never "-0.0"
                 p.samples,
                 p.utility_nats,
                 p.walk.join(",")
@@ -111,6 +135,13 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
                 )
             }
         );
+        if !plan_ids.is_empty() {
+            let team_args: Vec<String> = plan_ids.iter().map(|id| format!("--team {id}")).collect();
+            println!(
+                "next            trailprint render {} -o team.svg   (one colour per surveyor)",
+                team_args.join(" ")
+            );
+        }
     }
     Ok(())
 }

@@ -24,14 +24,17 @@ mod cmd_import;
 mod cmd_import_floorplan;
 mod cmd_pilot;
 mod cmd_plan;
+mod cmd_plans;
 mod cmd_render;
 mod cmd_sessions;
 mod cmd_simulate;
 mod cmd_team_plan;
 mod cmd_utility;
+mod cmd_vertices;
 mod opts;
 mod progress;
 mod store_cli;
+mod walk_text;
 
 #[derive(Parser)]
 #[command(
@@ -83,6 +86,10 @@ enum Command {
     TeamPlan(cmd_team_plan::Args),
     /// Plan a survey walk from a start to an end vertex within a budget.
     Plan(cmd_plan::Args),
+    /// List the saved plans (`plans [NAME]`), or print one (`plans show ID`).
+    Plans(cmd_plans::Args),
+    /// List a building's vertices (id, label, floor, position) to pick a start and an end.
+    Vertices(cmd_vertices::Args),
     /// Benchmark the planners: algorithms x budgets x seeds, Markdown and CSV tables.
     Bench(cmd_bench::Args),
     /// Plan a walk, then walk it as a survey session with a simulated surveyor.
@@ -127,6 +134,8 @@ fn main() -> ExitCode {
         Command::Export(a) => cmd_export::run(&a, db),
         Command::Delete(a) => cmd_delete::run(&a, db),
         Command::Plan(a) => cmd_plan::run(a, db),
+        Command::Plans(a) => cmd_plans::run(a, db),
+        Command::Vertices(a) => cmd_vertices::run(&a, db),
         Command::Bench(a) => cmd_bench::run(a),
         Command::Simulate(a) => cmd_simulate::run(a, db),
         Command::Sessions(a) => cmd_sessions::run(&a, db),

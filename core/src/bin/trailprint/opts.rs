@@ -157,7 +157,8 @@ pub struct RouteOpts {
     /// End vertex id (may equal the start).
     #[arg(long)]
     pub end: String,
-    /// Budget: the longest walk allowed, metres.
-    #[arg(long)]
+    /// Budget: the longest walk allowed, metres. (A negative value is read as a number,
+    /// so that the planner can say that a budget must be positive.)
+    #[arg(long, allow_negative_numbers = true)]
     pub budget: f64,
 }

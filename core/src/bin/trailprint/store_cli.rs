@@ -30,7 +30,10 @@ pub fn default_db_path() -> Result<PathBuf> {
 /// use; an explicit `--db` directory must exist).
 pub fn open_store(db: Option<&Path>) -> Result<Store> {
     match db {
-        Some(path) => Store::open(path),
+        Some(path) => {
+            check_db_path(path)?;
+            Store::open(path)
+        }
         None => {
             let path = default_db_path()?;
             if let Some(dir) = path.parent() {
@@ -39,6 +42,19 @@ pub fn open_store(db: Option<&Path>) -> Result<Store> {
             Store::open(&path)
         }
     }
+}
+
+/// Refuses a `--db` that is a directory (SQLite would say "unable to open database file"),
+/// naming a file inside it that would do.
+pub fn check_db_path(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::InvalidRequest(format!(
+            "--db {}: is a directory; --db takes the database file, for example --db {}",
+            path.display(),
+            path.join("trailprint.db").display()
+        )));
+    }
+    Ok(())
 }
 
 /// Whether `spec` names a building file rather than a building in the database: an existing

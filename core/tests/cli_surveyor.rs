@@ -1,0 +1,634 @@
+//! The surveyor's side of the command line (issue 18), run as a user runs it: saved plans
+//! listed and shown, vertices listed, fits stored, `demo` ending with next steps, `plan`
+//! printed for a person, errors that say what would do, and maps of plans, sessions and
+//! teams.
+
+#![cfg(unix)]
+#![allow(clippy::expect_used)] // tests and their helpers may expect
+
+mod store_common;
+
+use std::path::Path;
+
+use store_common::{run, run_ok, shared_instance};
+
+const DEMO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json");
+
+fn demo_name() -> String {
+    trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
+        .expect("demo")
+        .name
+}
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Runs and expects exit code 1 with one `error:` line; returns it.
+fn run_err(db: &Path, args: &[&str]) -> String {
+    let out = run(db, args);
+    let e = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {e}");
+    assert!(e.starts_with("error: "), "{e}");
+    e
+}
+
+/// A database holding the demo building and one plan of it (a human's walk).
+fn with_plan(db: &Path) -> (String, i64) {
+    run_ok(db, &["import", DEMO]);
+    let name = demo_name();
+    let out = run_ok(
+        db,
+        &[
+            "plan",
+            "--building",
+            &name,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "60",
+            "--model",
+            "human",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    (name, v["plan_id"].as_i64().expect("plan_id"))
+}
+
+#[test]
+fn plans_are_listed_and_shown_with_their_walk() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let empty = run_ok(&db, &["plans"]);
+    assert!(empty.starts_with("no plans"), "{empty}");
+    let (name, id) = with_plan(&db);
+
+    let list = run_ok(&db, &["plans"]);
+    let header = list.lines().next().expect("header");
+    for col in [
+        "id",
+        "building",
+        "route",
+        "budget_m",
+        "length_m",
+        "utility",
+        "algorithm",
+        "created",
+    ] {
+        assert!(header.contains(col), "{header}");
+    }
+    let row = list.lines().nth(1).expect("row");
+    assert!(row.trim_start().starts_with(&id.to_string()), "{row}");
+    assert!(
+        row.contains("f0-c00 -> f0-c15") && row.contains("60.0") && row.contains("human"),
+        "{row}"
+    );
+
+    let json: serde_json::Value =
+        serde_json::from_str(run_ok(&db, &["plans", &name, "--json"]).trim()).expect("json");
+    let rows = json.as_array().expect("array");
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["id"], id);
+    assert_eq!(rows[0]["building"], name.as_str());
+    assert_eq!(rows[0]["budget_m"], 60.0);
+    assert!(rows[0]["length_m"].as_f64().expect("length") <= 60.0 + 1e-9);
+    assert!(
+        rows[0]["created"]
+            .as_str()
+            .expect("created")
+            .starts_with("20")
+    );
+
+    let e = run_err(&db, &["plans", "No such building"]);
+    assert!(e.contains("No such building") && e.contains(&name), "{e}");
+
+    // `plans show`: the figures and the numbered walk, the same walk as stored.
+    let show = run_ok(&db, &["plans", "show", &id.to_string()]);
+    let stored = &rows[0];
+    let walk: Vec<String> = serde_json::from_str::<serde_json::Value>(
+        run_ok(&db, &["plans", "show", &id.to_string(), "--json"]).trim(),
+    )
+    .expect("json")["walk"]
+        .as_array()
+        .expect("walk")
+        .iter()
+        .map(|v| v.as_str().expect("id").to_string())
+        .collect();
+    assert!(
+        show.contains(&format!("walk          {}", walk.join(","))),
+        "{show}"
+    );
+    assert!(
+        show.contains(&format!("steps         {} vertices", walk.len())),
+        "{show}"
+    );
+    let last_row = format!("{:>4}  {}", walk.len(), walk[walk.len() - 1]);
+    assert!(show.contains(&last_row), "{show}");
+    assert!(show.contains("at 1.2 m/s"), "{show}");
+    assert!(show.contains(&format!(
+        "{:.1} m of the 60 m budget",
+        stored["length_m"].as_f64().expect("len")
+    )));
+
+    let sheet = run_ok(&db, &["plans", "show", &id.to_string(), "--instructions"]);
+    assert!(
+        sheet.contains("Start at f0-c00 on Ground; check in there"),
+        "{sheet}"
+    );
+    let last = sheet.lines().last().expect("line");
+    assert!(
+        last.contains(&format!("step {:>3}  In ", walk.len()))
+            && last.ends_with("at f0-c15: that is the end of the walk; check in there."),
+        "{sheet}"
+    );
+
+    let e = run_err(&db, &["plans", "show", "999"]);
+    assert!(
+        e.contains("no plan 999") && e.contains(&format!("plan ids there: {id}")),
+        "{e}"
+    );
+}
+
+#[test]
+fn vertices_lists_ids_labels_floors_and_positions() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    run_ok(&db, &["import", DEMO]);
+    let b = trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
+        .expect("demo");
+    let text = run_ok(&db, &["vertices", &b.name]);
+    assert!(
+        text.starts_with(&format!("{}: {} vertices", b.name, b.len())),
+        "{text}"
+    );
+    assert_eq!(text.lines().count(), b.len() + 2);
+    let door = b
+        .vertices
+        .iter()
+        .find(|v| v.label.is_some())
+        .expect("a labelled vertex");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(&format!("{} ", door.id)))
+        .expect("door line");
+    assert!(
+        line.contains(door.label.as_deref().expect("label")) && line.contains("Ground"),
+        "{line}"
+    );
+    assert!(line.contains(&format!("{:.2}", door.pos.x)), "{line}");
+
+    // From a file too, as JSON, filtered.
+    let file = shared_instance("area-two.json");
+    let json: serde_json::Value = serde_json::from_str(
+        run_ok(
+            &db,
+            &[
+                "vertices",
+                file.to_str().expect("utf-8"),
+                "--grep",
+                "t2",
+                "--json",
+            ],
+        )
+        .trim(),
+    )
+    .expect("json");
+    let ids: Vec<&str> = json
+        .as_array()
+        .expect("array")
+        .iter()
+        .map(|v| v["id"].as_str().expect("id"))
+        .collect();
+    assert_eq!(ids, (20..30).map(|i| format!("t{i}")).collect::<Vec<_>>());
+    assert!(json[0]["neighbours"].as_array().expect("neighbours").len() >= 2);
+}
+
+#[test]
+fn fit_of_a_building_in_the_database_is_stored() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    run_ok(&db, &["import", DEMO]);
+    let name = demo_name();
+    let fits = |db: &Path| -> i64 {
+        let v: serde_json::Value =
+            serde_json::from_str(&run_ok(db, &["buildings", "--json"])).expect("json");
+        v[0]["fits"].as_i64().expect("fits")
+    };
+    assert_eq!(fits(&db), 0);
+    let out = run_ok(&db, &["fit", "--building", &name]);
+    assert!(out.contains("stored          as fit"), "{out}");
+    assert_eq!(fits(&db), 1);
+    let v: serde_json::Value =
+        serde_json::from_str(run_ok(&db, &["fit", "--building", &name, "--json"]).trim())
+            .expect("json");
+    assert!(v["fit_id"].as_i64().is_some(), "{v}");
+    assert_eq!(fits(&db), 2);
+    // The stored fit is the one printed.
+    let store = trailprint::Store::open(&db).expect("open");
+    let latest = store.latest_fit(name.as_str()).expect("fit").expect("some");
+    assert!((latest.record.kernel.ell - v["ell"].as_f64().expect("ell")).abs() < 1e-12);
+    // A file has nowhere to keep it.
+    let out = run_ok(&db, &["fit", "--building", DEMO]);
+    assert!(out.contains("stored          no"), "{out}");
+    assert_eq!(fits(&db), 2);
+}
+
+#[test]
+fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let out = run_ok(&db, &["demo", "--budget", "40"]);
+    assert!(
+        !out.contains("Robot {") && !out.contains("Human {") && !out.contains("interval:"),
+        "{out}"
+    );
+    assert!(out.contains("robot, a scan every 0.5 m"), "{out}");
+    let next: Vec<&str> = out
+        .lines()
+        .skip_while(|l| *l != "next steps:")
+        .skip(1)
+        .filter_map(|l| l.trim().strip_prefix("trailprint "))
+        .collect();
+    assert_eq!(next.len(), 4, "{out}");
+    // Each next step runs as printed (the db option included), bar the arguments that
+    // are words of the explanation after it.
+    let render = next[0].split("     ").next().expect("command");
+    assert!(
+        render.contains("render --plan 1 -o demo-plan.svg"),
+        "{render}"
+    );
+    let words: Vec<String> = shell_words(render);
+    let status = std::process::Command::new(store_common::BIN)
+        .args(&words)
+        .current_dir(dir.path())
+        .output()
+        .expect("run");
+    assert!(status.status.success(), "{}", stderr(&status));
+    let svg = std::fs::read_to_string(dir.path().join("demo-plan.svg")).expect("svg");
+    assert!(svg.contains("class=\"walk walk-0"));
+    let vertices = shell_words(next[3].split("     ").next().expect("command"));
+    let status = std::process::Command::new(store_common::BIN)
+        .args(&vertices)
+        .output()
+        .expect("run");
+    assert!(status.status.success(), "{}", stderr(&status));
+}
+
+/// Splits a printed command line into arguments (double quotes group, as a shell does).
+fn shell_words(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut any = false;
+    for c in line.chars() {
+        match c {
+            '"' => {
+                quoted = !quoted;
+                any = true;
+            }
+            ' ' if !quoted => {
+                if any || !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                }
+                any = false;
+            }
+            _ => cur.push(c),
+        }
+    }
+    if any || !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+#[test]
+fn plan_is_printed_for_a_person() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let args = [
+        "plan",
+        "--building",
+        DEMO,
+        "--start",
+        "f0-c00",
+        "--end",
+        "f0-c15",
+        "--budget",
+        "70",
+        "--model",
+        "human",
+        "--time-limit",
+        "0.3",
+    ];
+    let out = run_ok(&db, &args);
+    let walk: Vec<&str> = out
+        .lines()
+        .find_map(|l| l.strip_prefix("walk          "))
+        .expect("walk line")
+        .split(',')
+        .collect();
+    let b = trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
+        .expect("demo");
+    let length: f64 = {
+        let idx = b.resolve_walk(&walk).expect("walk");
+        b.walk_length(&idx)
+    };
+    // The time at the surveyor's 1.2 m/s.
+    let secs = (length / 1.2).round() as u64;
+    let expect = if secs < 60 {
+        format!("about {secs} s at 1.2 m/s")
+    } else {
+        format!("about {} min {:02} s at 1.2 m/s", secs / 60, secs % 60)
+    };
+    assert!(out.contains(&expect), "{expect}\n{out}");
+    // Every vertex numbered, with its label where it has one.
+    for (i, id) in walk.iter().enumerate() {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("  {:>4}  {id} ", i + 1)))
+            .unwrap_or_else(|| panic!("no step {} {id} in\n{out}", i + 1));
+        if let Some(label) = b.vertex_index(id).and_then(|v| b.vertices[v].label.clone()) {
+            assert!(line.contains(&label), "{line}");
+        }
+    }
+    // The sheet: the guidance sentences of a live session.
+    let mut with = args.to_vec();
+    with.push("--instructions");
+    let sheet = run_ok(&db, &with);
+    let lines: Vec<&str> = sheet.lines().filter(|l| l.contains(". step ")).collect();
+    assert!(!lines.is_empty(), "{sheet}");
+    for l in &lines {
+        let sentence = l.split_once("  In ").map(|x| x.1).expect("sentence");
+        assert!(sentence.contains(" m at "), "{l}");
+        assert!(
+            [
+                "turn left",
+                "turn right",
+                "turn back",
+                "go straight on",
+                "change floor",
+                "end of the walk"
+            ]
+            .iter()
+            .any(|w| sentence.contains(w)),
+            "{l}"
+        );
+    }
+    // The distances on the sheet add up to the walk's length (each rounded to 1 m).
+    let total: f64 = lines
+        .iter()
+        .map(|l| {
+            l.split_once("  In ")
+                .and_then(|x| x.1.split(' ').next())
+                .and_then(|d| d.parse::<f64>().ok())
+                .expect("distance")
+        })
+        .sum();
+    assert!(
+        (total - length).abs() <= 0.5 * lines.len() as f64 + 1e-9,
+        "{total} vs {length}"
+    );
+}
+
+#[test]
+fn errors_say_what_would_do() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    // A near-miss vertex id gets the nearest ids.
+    let e = run_err(
+        &db,
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c0",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "30",
+        ],
+    );
+    assert!(
+        e.contains("start: unknown vertex \"f0-c0\"") && e.contains("did you mean \"f0-c00\""),
+        "{e}"
+    );
+    let e = run_err(
+        &db,
+        &["utility", "--building", DEMO, "--walk", "f0-c00,f0-c1"],
+    );
+    assert!(e.contains("did you mean"), "{e}");
+    // CSV, Markdown and text given as a building.
+    for (name, text, begins) in [
+        ("pilot.csv", "x,y,ap-01\n0,0,-60\n", "x,y,ap-01"),
+        ("notes.md", "# Survey\n\nsome notes\n", "# Survey"),
+        ("empty.json", "", "the file is empty"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write");
+        let e = run_err(
+            &db,
+            &[
+                "plan",
+                "--building",
+                path.to_str().expect("utf-8"),
+                "--start",
+                "a",
+                "--end",
+                "a",
+                "--budget",
+                "5",
+            ],
+        );
+        assert!(
+            e.contains("not a JSON survey-building/1 file") && e.contains(begins),
+            "{e}"
+        );
+        assert!(
+            !e.contains("expected ident") && !e.contains("expected value"),
+            "{e}"
+        );
+    }
+    // A negative budget is a number the planner refuses, not an unknown option.
+    for cmd in ["plan", "simulate"] {
+        let mut args = vec![
+            cmd,
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c00",
+            "--budget",
+            "-5",
+        ];
+        if cmd == "simulate" {
+            args.extend(["--surveyor", "human"]);
+        }
+        let e = run_err(&db, &args);
+        assert!(
+            e.contains("budget must be a positive") && e.contains("-5"),
+            "{cmd}: {e}"
+        );
+    }
+    // A directory as --db.
+    let e = run_err(dir.path(), &["buildings"]);
+    assert!(
+        e.contains("is a directory")
+            && e.contains(&format!("{}", dir.path().join("trailprint.db").display())),
+        "{e}"
+    );
+}
+
+#[test]
+fn render_draws_plans_sessions_and_teams() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let (name, id) = with_plan(&db);
+    let svg_of = |args: &[&str]| -> String {
+        let path = dir.path().join("out.svg");
+        let mut all = args.to_vec();
+        all.extend(["-o", path.to_str().expect("utf-8")]);
+        run_ok(&db, &all);
+        std::fs::read_to_string(&path).expect("svg")
+    };
+    let stored = trailprint::Store::open(&db)
+        .expect("open")
+        .load_plan(id)
+        .expect("plan");
+    let svg = svg_of(&["render", "--plan", &id.to_string()]);
+    assert_eq!(
+        svg.matches("class=\"walk walk-0").count(),
+        stored.record.walk.len() - 1,
+        "one segment per step of the stored walk"
+    );
+    assert!(
+        svg.contains(&format!("plan {id}: f0-c00 -&gt; f0-c15")),
+        "caption"
+    );
+    assert!(
+        svg.contains("class=\"heat\""),
+        "heat map with the plan's kernel"
+    );
+    assert!(svg.contains("class=\"step\""), "step numbers");
+    assert!(svg.contains(&format!(
+        "class=\"legend-text\" x=\"18\" y=\"4\">plan {id},"
+    )));
+
+    // A session: the walk as walked, with its scans.
+    let out = run_ok(
+        &db,
+        &[
+            "simulate",
+            "--building",
+            &name,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c15",
+            "--budget",
+            "40",
+            "--surveyor",
+            "human",
+            "--deviate",
+            "0.2",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let sim: serde_json::Value =
+        serde_json::from_str(out.lines().last().expect("json")).expect("json");
+    let sid = sim["session_id"].as_i64().expect("session id");
+    let svg = svg_of(&["render", "--session", &sid.to_string()]);
+    assert_eq!(
+        svg.matches("class=\"sample\"").count(),
+        sim["samples"].as_u64().expect("samples") as usize + 1,
+        "one dot per collected scan, plus the legend's"
+    );
+    assert!(svg.contains("class=\"track\""), "the track as walked");
+    assert!(
+        svg.contains(&format!("session {sid} (finished)")),
+        "caption"
+    );
+
+    // A team: plan ids and typed walks, one colour each.
+    let svg = svg_of(&[
+        "render",
+        "--team",
+        &id.to_string(),
+        "--team",
+        "f0-c15,f0-c14,f0-c13",
+    ]);
+    assert!(svg.contains("class=\"walk walk-0") && svg.contains("class=\"walk walk-1"));
+    assert!(
+        svg.contains("surveyor 2: 4.0 m"),
+        "legend names each surveyor"
+    );
+    let e = run_err(&db, &["render", "--team", "f0-c00,f0-c01", "-o", "x.svg"]);
+    assert!(e.contains("--building"), "{e}");
+    let e = run_err(&db, &["render", "--plan", "999", "-o", "x.svg"]);
+    assert!(e.contains("no plan 999"), "{e}");
+    // A plan of one building drawn on another is refused.
+    run_ok(
+        &db,
+        &[
+            "import",
+            shared_instance("area-two.json").to_str().expect("utf-8"),
+        ],
+    );
+    let e = run_err(
+        &db,
+        &[
+            "render",
+            "--plan",
+            &id.to_string(),
+            "--building",
+            "Area Two (synthetic)",
+            "-o",
+            "x.svg",
+        ],
+    );
+    assert!(e.contains("belongs to building"), "{e}");
+}
+
+#[test]
+fn team_plan_keeps_its_walks_as_plans() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    run_ok(&db, &["import", DEMO]);
+    let name = demo_name();
+    let out = run_ok(
+        &db,
+        &[
+            "team-plan",
+            "--building",
+            &name,
+            "--surveyor",
+            "f0-c00:f0-c00:20",
+            "--surveyor",
+            "f0-c15:f0-c15:20",
+            "--algorithm",
+            "greedy",
+            "--json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    let ids: Vec<i64> = v["plan_ids"]
+        .as_array()
+        .expect("plan ids")
+        .iter()
+        .map(|x| x.as_i64().expect("id"))
+        .collect();
+    assert_eq!(ids.len(), 2);
+    let store = trailprint::Store::open(&db).expect("open");
+    for (i, id) in ids.iter().enumerate() {
+        let p = store.load_plan(*id).expect("plan");
+        assert_eq!(serde_json::json!(p.record.walk), v["walks"][i]);
+    }
+}
