@@ -6,7 +6,7 @@
 #![cfg(unix)]
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use std::path::Path;
 

@@ -14,6 +14,7 @@ mod store_common;
 
 mod cli_pipe;
 mod cli_store;
+mod cli_surveyor;
 mod cli_synth;
 mod experiment_csv;
 mod floorplan_cli;
@@ -22,6 +23,7 @@ mod fuzz_regressions;
 mod localize;
 mod plan_exact;
 mod plan_props;
+mod readme_examples;
 mod session_api;
 mod session_budget_cli;
 mod session_cli;
