@@ -16,16 +16,21 @@
 
 pub mod building;
 pub mod error;
+#[cfg(feature = "research")]
 pub mod eval;
+#[cfg(feature = "research")]
 pub mod experiment;
 pub mod floorplan;
 pub mod gp;
 pub mod plan;
+#[cfg(feature = "research")]
 pub mod radiomap;
+#[cfg(feature = "research")]
 pub mod render;
 pub mod samples;
 pub mod session;
 pub mod store;
+#[cfg(feature = "research")]
 pub mod synth;
 pub mod team;
 pub mod utility;

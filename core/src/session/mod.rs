@@ -40,6 +40,7 @@
 pub mod log;
 pub mod posterior;
 pub mod replan;
+#[cfg(feature = "research")]
 pub mod sim;
 mod store_log;
 pub mod tracker;
