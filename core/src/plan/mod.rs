@@ -17,7 +17,7 @@
 //!   walk so far, `termination: cancelled`, never nothing.
 //!
 //! Every returned walk follows real edges, starts at `v_s`, ends at `v_t` and satisfies
-//! `C(P) <= B + 1e-9`; [`plan`] checks this before returning.
+//! `C(P) <= B + BUDGET_EPS` (1e-9 m); [`plan`] checks this before returning.
 
 pub mod auto;
 #[cfg(feature = "research")]

@@ -47,7 +47,8 @@ pub use planning::{
 };
 pub use plans::{PlanRecord, StoredPlan};
 pub use sessions::{
-    CollectedFingerprint, SessionEvent, SessionInfo, SessionStatus, StoredCollected, StoredEvent,
+    CollectedFingerprint, SessionEvent, SessionHeader, SessionInfo, SessionProvenance,
+    SessionStatus, StoredCollected, StoredEvent,
 };
 
 use crate::building::BuildingFile;
@@ -317,6 +318,19 @@ impl Store {
         plans: &[PlanRecord],
     ) -> Result<Vec<i64>> {
         plans::save_all(&mut *self.lock_write()?, building.into(), plans)
+    }
+
+    /// A session's building, plan and surveyor settings, by id.
+    pub fn session_header(&self, session_id: i64) -> Result<SessionHeader> {
+        sessions::header(&self.lock(), session_id)
+    }
+
+    /// The surveyor name and device of each session of a building, by session id.
+    pub fn session_provenance<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+    ) -> Result<Vec<SessionProvenance>> {
+        sessions::provenance(&self.lock(), building.into())
     }
 
     /// One plan by id.
