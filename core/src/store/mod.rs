@@ -273,7 +273,8 @@ impl Store {
         let n = floorplans::add_pilot(&mut self.lock(), building, pilot, origin, &db)?;
         if n >= 3 {
             // A pilot set the fitter refuses (no access point heard widely enough) keeps
-            // the pilot data; planning then reports the fit error itself.
+            // the pilot data; an earlier fit, if any, then stays the latest (known gap:
+            // fits do not record which pilot data they were made on).
             let _ = self.fit_and_record(building);
         }
         Ok(n)
