@@ -78,7 +78,7 @@ target_dir="${CARGO_TARGET_DIR:-}"
 if [[ -z "$target_dir" ]]; then
   target_dir="$(cargo metadata --format-version 1 --no-deps | python3 -c 'import json,sys; print(json.load(sys.stdin)["target_directory"])')"
 fi
-cargo_flags=(-p trailprint-bindings --profile "$profile")
+cargo_flags=(-p trailprint-bindings -p trailprint-uniffi-bindgen --profile "$profile")
 log "cargo build ${cargo_flags[*]} (target $target_dir)"
 cargo build -q "${cargo_flags[@]}" >&2
 case "$profile" in # the output folder: dev and test share target/debug

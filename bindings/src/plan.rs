@@ -4,8 +4,9 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
-use trailprint::plan::{self, Algorithm, Control, Observer, Progress};
-use trailprint::store::{self as core_store, PlanRecord};
+use trailprint::plan::{Algorithm, Control, Observer, PlanSettings, Progress};
+use trailprint::store::StorePlanRequest;
+use trailprint::team::SurveyorTask;
 
 use crate::model::SurveyorProfile;
 use crate::store::{PlanSummary, TrailprintStore};
@@ -176,48 +177,56 @@ impl PlanJob {
     }
 }
 
-/// Builds the core request (kernel chosen by the store).
-pub(crate) fn core_request(
-    r: &PlanRequest,
-    kernel: trailprint::gp::Kernel,
-) -> Result<plan::PlanRequest> {
-    let mut req = plan::PlanRequest::new(&r.start, &r.end, r.budget_m, kernel);
-    req.model = r.surveyor.into();
-    req.algorithm = r.algorithm.into();
-    req.seed = r.seed;
-    if let Some(mb) = r.memory_budget_mb {
-        req.memory_budget = mb.saturating_mul(1 << 20);
+/// The core's planner settings of a request (the kernel is the store's to choose).
+pub(crate) fn core_settings(
+    surveyor: SurveyorProfile,
+    algorithm: PlanAlgorithm,
+    seed: u64,
+    time_limit_s: Option<f64>,
+    memory_budget_mb: Option<u64>,
+) -> Result<PlanSettings> {
+    let mut s = PlanSettings {
+        model: surveyor.into(),
+        algorithm: algorithm.into(),
+        seed,
+        ..PlanSettings::default()
+    };
+    if let Some(mb) = memory_budget_mb {
+        s.memory_budget = mb.saturating_mul(1 << 20);
     }
-    req.time_limit = match r.time_limit_s {
+    s.time_limit = match time_limit_s {
         None => None,
-        Some(s) if s.is_finite() && s > 0.0 => Some(std::time::Duration::from_secs_f64(s)),
-        Some(s) => {
+        Some(t) if t.is_finite() && t > 0.0 => Some(std::time::Duration::from_secs_f64(t)),
+        Some(t) => {
             return Err(TrailprintError::InvalidRequest(format!(
-                "time limit must be a positive number of seconds, got {s}"
+                "time limit must be a positive number of seconds, got {t}"
             )));
         }
     };
-    Ok(req)
+    Ok(s)
 }
 
 impl TrailprintStore {
-    /// Plans and saves (the body of [`PlanJob::run`]).
-    pub(crate) fn run_plan(
-        &self,
-        r: &PlanRequest,
-        control: &trailprint::plan::Control,
-    ) -> Result<PlanSummary> {
-        let building = Arc::new(self.inner.get_building(r.building_id)?);
-        let kernel = self.kernel_for(r.building_id)?;
-        let req = core_request(r, kernel)?;
-        // Condition on everything already collected in this building, so that a new walk
-        // goes where the data is thinnest.
-        let prior = self.inner.collected_observations(r.building_id, &kernel)?;
-        let res = trailprint::plan::plan_with_prior(building, &req, &prior, control)?;
-        let record = PlanRecord::from_plan(&req, &res, core_store::now_ms());
-        let id = self.inner.save_plan(r.building_id, &record)?;
-        let mut summary: PlanSummary = self.inner.load_plan(id)?.into();
-        summary.termination = Some(res.termination.name().to_string());
+    /// Plans and saves (the body of [`PlanJob::run`]): `Store::plan_and_save`.
+    pub(crate) fn run_plan(&self, r: &PlanRequest, control: &Control) -> Result<PlanSummary> {
+        let request = StorePlanRequest {
+            route: SurveyorTask {
+                start: r.start.clone(),
+                end: r.end.clone(),
+                budget: r.budget_m,
+            },
+            settings: core_settings(
+                r.surveyor,
+                r.algorithm,
+                r.seed,
+                r.time_limit_s,
+                r.memory_budget_mb,
+            )?,
+            kernel: None,
+        };
+        let saved = self.inner.plan_and_save(r.building_id, &request, control)?;
+        let mut summary: PlanSummary = saved.stored.into();
+        summary.termination = Some(saved.result.termination.name().to_string());
         Ok(summary)
     }
 }

@@ -3,8 +3,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use trailprint::Building;
-use trailprint::store::{self, BuildingInfo, FitRecord, ImportOptions, Store};
+use trailprint::store::{self, BuildingInfo, ImportOptions, Store};
 
 use crate::Result;
 use crate::building::{BuildingMap, KernelParams};
@@ -114,28 +113,6 @@ pub struct TrailprintStore {
     pub(crate) inner: Arc<Store>,
 }
 
-impl TrailprintStore {
-    /// The kernel to plan with: the building file's, else the latest fit, else a new fit
-    /// (recorded).
-    pub(crate) fn kernel_for(&self, building_id: i64) -> Result<trailprint::gp::Kernel> {
-        let b = self.inner.get_building(building_id)?;
-        if let Some(k) = b.kernel {
-            return Ok(k);
-        }
-        if let Some(f) = self.inner.latest_fit(building_id)? {
-            return Ok(f.record.kernel);
-        }
-        Ok(self.fit_and_record(building_id, &b)?.kernel.into())
-    }
-
-    fn fit_and_record(&self, building_id: i64, b: &Building) -> Result<FitSummary> {
-        let fit = trailprint::gp::fit_kernel(&b.pilot)?;
-        self.inner
-            .record_fit(building_id, &FitRecord::from_fit(&fit, store::now_ms()))?;
-        Ok(fit.into())
-    }
-}
-
 #[uniffi::export]
 impl TrailprintStore {
     /// Opens (or creates) the database file at `path`, upgrading its schema.
@@ -199,20 +176,16 @@ impl TrailprintStore {
 
     /// Fits the kernel on the building's pilot data and records the fit.
     pub fn fit(&self, building_id: i64) -> Result<FitSummary> {
-        let b = self.inner.get_building(building_id)?;
-        self.fit_and_record(building_id, &b)
+        Ok(self.inner.fit_and_record(building_id)?.0.into())
     }
 
-    /// The kernel plans of this building use: the file's, else the latest fit, else null.
+    /// The kernel plans of this building use (the core's policy, `Store::planning_kernel`):
+    /// the file's, else the latest fit, else null (the next plan fits and records one).
     pub fn kernel(&self, building_id: i64) -> Result<Option<KernelParams>> {
-        let b = self.inner.get_building(building_id)?;
-        if let Some(k) = b.kernel {
-            return Ok(Some(k.into()));
-        }
         Ok(self
             .inner
-            .latest_fit(building_id)?
-            .map(|f| f.record.kernel.into()))
+            .known_planning_kernel(building_id, None)?
+            .map(|k| k.kernel.into()))
     }
 
     /// The plans of a building, oldest first.

@@ -1,14 +1,13 @@
 //! Several surveyors: team planning and survey bundles (export on one phone, import on
 //! another or on a desktop).
 
-use std::sync::Arc;
+use trailprint::plan::Control;
+use trailprint::store::{self as core_store, ExportOptions, StoreTeamRequest};
+use trailprint::team::SurveyorTask;
 
-use trailprint::store::{self as core_store, ExportOptions, PlanRecord};
-use trailprint::team::{SurveyorTask, TeamRequest};
-
-use crate::plan::{PlanAlgorithm, core_request};
+use crate::Result;
+use crate::plan::{PlanAlgorithm, core_settings};
 use crate::store::TrailprintStore;
-use crate::{Result, TrailprintError};
 
 /// One member of a team: where they start and end, and how far they may walk.
 #[derive(Debug, Clone, uniffi::Record)]
@@ -75,24 +74,8 @@ impl TrailprintStore {
     /// everything already collected in the building) and saves one plan per member.
     /// Blocking: call it off the main thread.
     pub fn plan_team(&self, request: TeamPlanRequest) -> Result<TeamPlanSummary> {
-        let building = Arc::new(self.inner.get_building(request.building_id)?);
-        let kernel = self.kernel_for(request.building_id)?;
-        let base = core_request(
-            &crate::plan::PlanRequest {
-                building_id: request.building_id,
-                start: String::new(),
-                end: String::new(),
-                budget_m: 0.0,
-                surveyor: request.surveyor,
-                algorithm: request.algorithm,
-                seed: request.seed,
-                time_limit_s: request.time_limit_s,
-                memory_budget_mb: None,
-            },
-            kernel,
-        )?;
-        let req = TeamRequest {
-            surveyors: request
+        let req = StoreTeamRequest {
+            members: request
                 .members
                 .iter()
                 .map(|m| SurveyorTask {
@@ -101,29 +84,26 @@ impl TrailprintStore {
                     budget: m.budget_m,
                 })
                 .collect(),
-            base: base.clone(),
+            settings: core_settings(
+                request.surveyor,
+                request.algorithm,
+                request.seed,
+                request.time_limit_s,
+                None,
+            )?,
+            kernel: None,
             independent: request.independent,
             rounds: 1,
+            condition_on_collected: true,
         };
-        let prior = self
+        let saved = self
             .inner
-            .collected_observations(request.building_id, &kernel)?;
-        let team =
-            trailprint::team::plan_team(building, &req, &prior, &trailprint::plan::Control::new())?;
-        let mut plan_ids = Vec::with_capacity(team.plans.len());
-        for (res, member) in team.plans.iter().zip(&req.surveyors) {
-            let mut r = base.clone();
-            r.start = member.start.clone();
-            r.end = member.end.clone();
-            r.budget = member.budget;
-            let record = PlanRecord::from_plan(&r, res, core_store::now_ms());
-            plan_ids.push(self.inner.save_plan(request.building_id, &record)?);
-        }
+            .plan_team_and_save(request.building_id, &req, &Control::new())?;
         Ok(TeamPlanSummary {
-            plan_ids,
-            walks: team.plans.iter().map(|p| p.walk.clone()).collect(),
-            utilities_nats: team.plans.iter().map(|p| p.utility_nats).collect(),
-            team_utility_nats: team.team_utility_nats,
+            plan_ids: saved.plan_ids,
+            walks: saved.team.plans.iter().map(|p| p.walk.clone()).collect(),
+            utilities_nats: saved.team.plans.iter().map(|p| p.utility_nats).collect(),
+            team_utility_nats: saved.team.team_utility_nats,
         })
     }
 
@@ -146,14 +126,9 @@ impl TrailprintStore {
     }
 
     /// Merges a bundle (JSON text; `origin` names it in errors). Importing the same bundle
-    /// again changes nothing; a corrupt or truncated bundle fails with `InvalidBuilding`
-    /// and imports nothing.
+    /// again changes nothing; a corrupt or truncated bundle, or one over the core's limit
+    /// (`MAX_BUNDLE_BYTES`, 256 MiB), fails with `InvalidBuilding` and imports nothing.
     pub fn import_bundle(&self, json: String, origin: String) -> Result<BundleImportSummary> {
-        if json.len() > 256 * 1024 * 1024 {
-            return Err(TrailprintError::InvalidRequest(format!(
-                "{origin}: bundle larger than 256 MiB"
-            )));
-        }
         Ok(self.inner.import_bundle(&json, &origin)?.into())
     }
 }

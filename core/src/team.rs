@@ -20,7 +20,8 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::building::Building;
-use crate::plan::{Control, PlanRequest, PlanResult, plan_with_prior};
+use crate::gp::Kernel;
+use crate::plan::{Control, PlanRequest, PlanResult, PlanSettings, plan_with_prior};
 use crate::samples::sample_walk;
 use crate::utility::{Observation, UtilityEngine};
 use crate::{Error, Result};
@@ -58,13 +59,36 @@ impl SurveyorTask {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TeamRequest {
     pub surveyors: Vec<SurveyorTask>,
-    /// Planner settings shared by all surveyors (`start`, `end`, `budget` are replaced by
-    /// each surveyor's; the seed is offset by the surveyor's index).
-    pub base: PlanRequest,
+    /// The kernel every walk is planned and valued with.
+    pub kernel: Kernel,
+    /// Planner settings shared by all surveyors (surveyor `i` uses the seed plus `i`).
+    pub settings: PlanSettings,
     /// Plan each surveyor alone, ignoring the others (for comparison).
     pub independent: bool,
     /// Refinement rounds after planning in turn (0: in turn only).
     pub rounds: usize,
+}
+
+impl TeamRequest {
+    /// The single-walk request of each surveyor, in order: its route, the shared settings
+    /// and kernel, the seed offset by its index.
+    pub fn requests(&self) -> Vec<PlanRequest> {
+        self.surveyors
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let mut r = PlanRequest::with_settings(
+                    &t.start,
+                    &t.end,
+                    t.budget,
+                    self.kernel,
+                    &self.settings,
+                );
+                r.seed = self.settings.seed.wrapping_add(i as u64);
+                r
+            })
+            .collect()
+    }
 }
 
 /// The team's walks and what they are worth together.
@@ -125,15 +149,8 @@ pub fn plan_team(
             "a team needs at least one surveyor".into(),
         ));
     }
-    let request_for = |i: usize| {
-        let t = &req.surveyors[i];
-        let mut r = req.base.clone();
-        r.start = t.start.clone();
-        r.end = t.end.clone();
-        r.budget = t.budget;
-        r.seed = req.base.seed.wrapping_add(i as u64);
-        r
-    };
+    let requests = req.requests();
+    let request_for = |i: usize| requests[i].clone();
     let name_err = |i: usize, e: Error| match e {
         Error::Cancelled => Error::Cancelled,
         other => Error::InvalidRequest(format!(
@@ -144,7 +161,7 @@ pub fn plan_team(
     };
     let k = req.surveyors.len();
     let engine =
-        UtilityEngine::with_prior(building.clone(), req.base.kernel, req.base.model, prior)?;
+        UtilityEngine::with_prior(building.clone(), req.kernel, req.settings.model, prior)?;
     let mut walks: Vec<Vec<usize>> = Vec::with_capacity(k);
     let mut results: Vec<PlanResult> = Vec::with_capacity(k);
     for i in 0..k {
@@ -235,12 +252,14 @@ mod tests {
     }
 
     fn request(independent: bool) -> TeamRequest {
-        let mut base = PlanRequest::new("b00", "b00", 60.0, Kernel::new(100.0, 10.0, 3.3));
         // Genetic without a time limit: deterministic for a seed, whatever the machine.
-        base.algorithm = Algorithm::Genetic;
-        base.params.population = 60;
-        base.model = SurveyorModel::Robot { interval: 1.0 };
-        base.seed = 3;
+        let mut settings = PlanSettings {
+            algorithm: Algorithm::Genetic,
+            model: SurveyorModel::Robot { interval: 1.0 },
+            seed: 3,
+            ..PlanSettings::default()
+        };
+        settings.params.population = 60;
         TeamRequest {
             surveyors: vec![
                 SurveyorTask {
@@ -254,7 +273,8 @@ mod tests {
                     budget: 60.0,
                 },
             ],
-            base,
+            kernel: Kernel::new(100.0, 10.0, 3.3),
+            settings,
             independent,
             rounds: 1,
         }
@@ -300,11 +320,11 @@ mod tests {
             "team {} below the best single plan {best_single}",
             team.team_utility_nats
         );
-        let base = request(false).base;
+        let base = &request(false).requests()[0];
         let mut obs = crate::utility::reference::pilot_observations(&b.pilot_points());
         for p in &team.plans {
             let walk = b.resolve_walk(&p.walk).expect("walk");
-            obs.extend(observations(&b, &base, &walk).expect("samples"));
+            obs.extend(observations(&b, base, &walk).expect("samples"));
         }
         let joint =
             crate::utility::reference::reference_utility(&base.kernel, &b.vertex_points(), &obs)

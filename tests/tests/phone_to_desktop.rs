@@ -152,3 +152,64 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
         fresh.utility_nats
     );
 }
+
+/// The phone and the command line plan a stored building with one kernel (issue 15): the
+/// phone's first plan fits and records the kernel, and the core call the command line
+/// makes (`Store::plan_and_save`) on the same database takes that stored fit.
+#[test]
+fn the_phone_and_the_command_line_plan_one_building_with_one_kernel() {
+    use trailprint::store::{KernelSource, StorePlanRequest};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("phone.db").display().to_string();
+    let phone = TrailprintStore::open(db.clone()).expect("open");
+    let b = phone
+        .import_building_json(demo_json(), "demo".into(), false)
+        .expect("import");
+    let request = FfiPlanRequest {
+        building_id: b.id,
+        start: "f0-c00".into(),
+        end: "f0-r5-door".into(),
+        budget_m: 25.0,
+        surveyor: default_robot_profile(),
+        algorithm: PlanAlgorithm::Greedy,
+        seed: 3,
+        time_limit_s: None,
+        memory_budget_mb: None,
+    };
+    let on_phone = phone.clone().new_plan(request).run(None).expect("plan");
+    let desk = Store::open(&db).expect("core store");
+    let on_desk = desk
+        .plan_and_save(
+            b.id,
+            &StorePlanRequest {
+                route: trailprint::team::SurveyorTask {
+                    start: "f0-c00".into(),
+                    end: "f0-r5-door".into(),
+                    budget: 25.0,
+                },
+                settings: trailprint::plan::PlanSettings {
+                    algorithm: trailprint::plan::Algorithm::Greedy,
+                    seed: 3,
+                    ..Default::default()
+                },
+                kernel: None,
+            },
+            &trailprint::plan::Control::new(),
+        )
+        .expect("plan");
+    assert!(matches!(
+        on_desk.kernel.source,
+        KernelSource::StoredFit { .. }
+    ));
+    let k = on_desk.kernel.kernel;
+    assert_eq!(
+        (
+            on_phone.kernel.sf2,
+            on_phone.kernel.ell,
+            on_phone.kernel.sn2
+        ),
+        (k.sf2, k.ell, k.sn2)
+    );
+    assert_eq!(on_phone.walk, on_desk.result.walk);
+    assert_eq!(desk.building_info(b.id).expect("info").fits, 1);
+}

@@ -6,7 +6,7 @@
 //! Subtrees below a few levels run in parallel (rayon) and share the incumbent.
 //!
 //! # Pruning, and why each rule is safe
-//! 1. **Feasibility**: step to `w` only if `C + l(v, w) + d(w, v_t) <= B + 1e-9`.
+//! 1. **Feasibility**: step to `w` only if `C + l(v, w) + d(w, v_t) <= B + BUDGET_EPS`.
 //! 2. **Utility bound** (robot model): let `S` be the samples so far (plus the pilot
 //!    data) and `F = (p_1, ..., p_M)` the samples any completion can still add, in walk
 //!    order; `M` is at most the number of sample arcs `k d` left in `(C, B]`. By the chain

@@ -74,7 +74,7 @@ pub fn random_walk(p: &Problem, rng: &mut ChaCha8Rng) -> Vec<usize> {
         opts.clear();
         for &(w, e) in b.neighbours(v) {
             let l = b.edges[e].length;
-            if len + l <= half + 1e-9 && p.fits(len + l + m.dist(w, p.end)) {
+            if len + l <= half + super::BUDGET_EPS && p.fits(len + l + m.dist(w, p.end)) {
                 opts.push((w, l));
             }
         }

@@ -100,7 +100,7 @@ fn splice(p: &Problem, w: &[usize], i: usize, via: &[usize], j: usize) -> Vec<us
 /// the budget and changes the walk.
 fn reachable(p: &Problem, w: &[usize], i: usize, j: usize, rng: &mut ChaCha8Rng) -> Option<usize> {
     let m = &p.metric;
-    let allowed = p.budget - p.length(w) + p.length(&w[i..=j]) + 1e-9;
+    let allowed = p.budget - p.length(w) + p.length(&w[i..=j]) + super::BUDGET_EPS;
     let cands: Vec<usize> = (0..p.building.len())
         .filter(|&v| m.dist(w[i], v) + m.dist(v, w[j]) <= allowed && !w[i..=j].contains(&v))
         .collect();
@@ -184,7 +184,7 @@ fn random_move_at(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng, depth: usize) 
             opts.clear();
             for &(x, e) in b.neighbours(v) {
                 let el = b.edges[e].length;
-                if l + el + p.metric.dist(x, w[j]) <= allowed + 1e-9 {
+                if l + el + p.metric.dist(x, w[j]) <= allowed + super::BUDGET_EPS {
                     opts.push((x, el));
                 }
             }

@@ -44,6 +44,39 @@ impl PartialOrd for Item {
     }
 }
 
+/// Dijkstra from `root`: the walking distance of every vertex to `root` and its parent on
+/// the shortest-path tree, i.e. its next hop towards `root` (`root`'s parent is itself;
+/// `u32::MAX` for a vertex that cannot reach it). Among equally short ways the parent is
+/// the smallest vertex index, so the tree, and every walk built from it, is the same on
+/// every run and machine. The one shortest-path search of the crate: the metric closure
+/// and the session's replanning both use it.
+pub fn shortest_path_tree(b: &Building, root: usize) -> (Vec<f64>, Vec<u32>) {
+    let n = b.len();
+    let mut d = vec![f64::INFINITY; n];
+    let mut parent = vec![u32::MAX; n];
+    let mut heap = BinaryHeap::new();
+    d[root] = 0.0;
+    parent[root] = root as u32;
+    heap.push(Item(0.0, root));
+    while let Some(Item(du, u)) = heap.pop() {
+        if du > d[u] {
+            continue;
+        }
+        for &(w, e) in b.neighbours(u) {
+            let nd = du + b.edges[e].length;
+            if nd < d[w] || (nd == d[w] && (u as u32) < parent[w]) {
+                let improved = nd < d[w];
+                d[w] = nd;
+                parent[w] = u as u32;
+                if improved {
+                    heap.push(Item(nd, w));
+                }
+            }
+        }
+    }
+    (d, parent)
+}
+
 impl Metric {
     /// Computes the closure of `b`.
     pub fn new(b: &Building) -> Self {
@@ -52,31 +85,7 @@ impl Metric {
         // towards t, so each run fills column t of `next`.
         let cols: Vec<(Vec<f64>, Vec<u32>)> = (0..n)
             .into_par_iter()
-            .map(|t| {
-                let mut d = vec![f64::INFINITY; n];
-                let mut parent = vec![u32::MAX; n];
-                let mut heap = BinaryHeap::new();
-                d[t] = 0.0;
-                parent[t] = t as u32;
-                heap.push(Item(0.0, t));
-                while let Some(Item(du, u)) = heap.pop() {
-                    if du > d[u] {
-                        continue;
-                    }
-                    for &(w, e) in b.neighbours(u) {
-                        let nd = du + b.edges[e].length;
-                        if nd < d[w] || (nd == d[w] && (u as u32) < parent[w]) {
-                            let improved = nd < d[w];
-                            d[w] = nd;
-                            parent[w] = u as u32;
-                            if improved {
-                                heap.push(Item(nd, w));
-                            }
-                        }
-                    }
-                }
-                (d, parent)
-            })
+            .map(|t| shortest_path_tree(b, t))
             .collect();
         let mut dist = vec![f64::INFINITY; n * n];
         let mut next = vec![u32::MAX; n * n];

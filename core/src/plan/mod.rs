@@ -17,9 +17,10 @@
 //!   walk so far, `termination: cancelled`, never nothing.
 //!
 //! Every returned walk follows real edges, starts at `v_s`, ends at `v_t` and satisfies
-//! `C(P) <= B + 1e-9`; [`plan`] checks this before returning.
+//! `C(P) <= B + BUDGET_EPS` (1e-9 m); [`plan`] checks this before returning.
 
 pub mod auto;
+#[cfg(feature = "research")]
 pub mod bench;
 pub mod coverage;
 pub mod ero;
@@ -215,6 +216,43 @@ pub struct PlanRequest {
     pub memory_budget: u64,
 }
 
+/// How to plan, apart from where and with which kernel: what a team's members share, and
+/// what a caller that lets the store choose the kernel
+/// ([`Store::plan_and_save`](crate::store::Store::plan_and_save)) passes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlanSettings {
+    /// Who walks.
+    #[serde(default)]
+    pub model: SurveyorModel,
+    #[serde(default)]
+    pub algorithm: Algorithm,
+    /// Seed of every random choice.
+    #[serde(default)]
+    pub seed: u64,
+    /// Stop with the best walk so far after this long (`auto`: 2 s when `None`).
+    #[serde(default, with = "opt_secs")]
+    pub time_limit: Option<Duration>,
+    #[serde(default)]
+    pub params: Params,
+    /// Most memory the plan may use, bytes (default [`DEFAULT_MEMORY_BUDGET`]).
+    #[serde(default = "default_memory_budget")]
+    pub memory_budget: u64,
+}
+
+impl Default for PlanSettings {
+    /// The defaults of [`PlanRequest::new`]: `auto`, robot model, seed 0.
+    fn default() -> Self {
+        PlanSettings {
+            model: SurveyorModel::default(),
+            algorithm: Algorithm::default(),
+            seed: 0,
+            time_limit: None,
+            params: Params::default(),
+            memory_budget: DEFAULT_MEMORY_BUDGET,
+        }
+    }
+}
+
 /// Largest genetic population a request may ask for (the paper uses 100 and 200).
 pub const MAX_POPULATION: usize = 10_000;
 
@@ -236,17 +274,41 @@ pub const MAX_BUDGET_FACTOR: f64 = 4.0;
 impl PlanRequest {
     /// A request with default algorithm (`auto`), robot model, seed 0 and default parameters.
     pub fn new(start: &str, end: &str, budget: f64, kernel: Kernel) -> Self {
+        Self::with_settings(start, end, budget, kernel, &PlanSettings::default())
+    }
+
+    /// A request for the route `start` to `end` within `budget`, with `kernel` and the
+    /// planner settings `s`.
+    pub fn with_settings(
+        start: &str,
+        end: &str,
+        budget: f64,
+        kernel: Kernel,
+        s: &PlanSettings,
+    ) -> Self {
         PlanRequest {
             start: start.to_string(),
             end: end.to_string(),
             budget,
-            model: SurveyorModel::default(),
+            model: s.model,
             kernel,
-            algorithm: Algorithm::default(),
-            seed: 0,
-            time_limit: None,
-            params: Params::default(),
-            memory_budget: DEFAULT_MEMORY_BUDGET,
+            algorithm: s.algorithm,
+            seed: s.seed,
+            time_limit: s.time_limit,
+            params: s.params,
+            memory_budget: s.memory_budget,
+        }
+    }
+
+    /// The planner settings of this request (everything but the route and the kernel).
+    pub fn settings(&self) -> PlanSettings {
+        PlanSettings {
+            model: self.model,
+            algorithm: self.algorithm,
+            seed: self.seed,
+            time_limit: self.time_limit,
+            params: self.params,
+            memory_budget: self.memory_budget,
         }
     }
 

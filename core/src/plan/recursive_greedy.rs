@@ -63,7 +63,7 @@ fn eval(ctx: &WalkState<'_>, walk: &[usize]) -> Result<f64> {
 fn budgets(lo: f64, hi: f64, step: f64) -> Vec<f64> {
     let mut out = Vec::new();
     let mut b = lo;
-    while b < hi - 1e-9 {
+    while b < hi - super::BUDGET_EPS {
         out.push(b);
         b += step;
     }
@@ -81,7 +81,7 @@ impl Ctx<'_> {
         depth: usize,
     ) -> Result<Found> {
         let m = &self.p.metric;
-        if m.dist(s, t) > budget + 1e-9 {
+        if m.dist(s, t) > budget + super::BUDGET_EPS {
             return Ok(None);
         }
         let sp = m.path(s, t);
@@ -117,7 +117,7 @@ impl Ctx<'_> {
     ) -> Result<Found> {
         let m = &self.p.metric;
         let (lo, hi) = (m.dist(s, v), budget - m.dist(v, t));
-        if lo > hi + 1e-9 {
+        if lo > hi + super::BUDGET_EPS {
             return Ok(None);
         }
         let list = match b1 {
@@ -175,7 +175,7 @@ impl Solver for RecursiveGreedy {
             let mut jobs = Vec::new();
             for v in 0..p.building.len() {
                 let (lo, hi) = (m.dist(p.start, v), p.budget - m.dist(v, p.end));
-                if lo > hi + 1e-9 {
+                if lo > hi + super::BUDGET_EPS {
                     continue;
                 }
                 if self.depth == 1 {

@@ -40,6 +40,7 @@
 pub mod log;
 pub mod posterior;
 pub mod replan;
+#[cfg(feature = "research")]
 pub mod sim;
 mod store_log;
 pub mod tracker;
@@ -75,12 +76,7 @@ pub struct SessionSettings {
     pub options: SessionOptions,
 }
 
-/// Milliseconds since the Unix epoch now.
-fn now_ms() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| i64::try_from(d.as_millis()).unwrap_or(i64::MAX))
-}
+use crate::store::now_ms;
 
 impl PlanData {
     /// A plan record for a walk given by ids (for tests and tools; figures left at zero

@@ -5,8 +5,6 @@
 //! gain per metre, always keeping the way to the end within budget). The planners of
 //! `trailprint::plan` plug in through the same trait.
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::sync::Arc;
 
 use crate::building::Building;
@@ -15,8 +13,8 @@ use crate::samples::SurveyorModel;
 use crate::utility::{Observation, UtilityEngine};
 use crate::{Error, Result};
 
-/// Slack on the budget (SPEC section 3).
-pub const BUDGET_EPS: f64 = 1e-9;
+/// Slack on the budget (SPEC section 3): the planners' one constant.
+pub use crate::plan::BUDGET_EPS;
 
 /// What a replanner is asked for.
 #[derive(Debug, Clone)]
@@ -158,42 +156,8 @@ pub fn check_reachable(
     Ok(())
 }
 
-#[derive(PartialEq)]
-struct Item(f64, usize);
-impl Eq for Item {}
-impl PartialOrd for Item {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Item {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // Reversed: BinaryHeap is a max-heap.
-        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
-    }
-}
-
-fn dijkstra(b: &Building, from: usize) -> (Vec<f64>, Vec<usize>) {
-    let n = b.len();
-    let mut dist = vec![f64::INFINITY; n];
-    let mut prev = vec![usize::MAX; n];
-    let mut heap = BinaryHeap::new();
-    dist[from] = 0.0;
-    heap.push(Item(0.0, from));
-    while let Some(Item(d, v)) = heap.pop() {
-        if d > dist[v] {
-            continue;
-        }
-        for &(w, e) in b.neighbours(v) {
-            let nd = d + b.edges[e].length;
-            if nd < dist[w] {
-                dist[w] = nd;
-                prev[w] = v;
-                heap.push(Item(nd, w));
-            }
-        }
-    }
-    (dist, prev)
+fn dijkstra(b: &Building, root: usize) -> (Vec<f64>, Vec<u32>) {
+    crate::plan::metric::shortest_path_tree(b, root)
 }
 
 /// Shortest walking distance from every vertex to `to` (the graph is undirected).
@@ -214,7 +178,7 @@ pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>>
     let mut out = vec![from];
     let mut v = from;
     while v != to {
-        v = prev[v];
+        v = prev[v] as usize;
         out.push(v);
     }
     Ok(out)

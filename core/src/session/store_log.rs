@@ -7,8 +7,6 @@
 
 use std::sync::Arc;
 
-use rusqlite::OptionalExtension;
-
 use super::log::{LogEntry, LogEvent, PlanData, SessionLog, SessionRow};
 use crate::building::Building;
 use crate::store::{BuildingRef, CollectedFingerprint, SessionEvent, Store};
@@ -102,17 +100,8 @@ impl SessionLog for Store {
     }
 
     fn session(&self, session_id: i64) -> Result<SessionRow> {
-        let row: Option<(i64, Option<i64>, Option<String>)> = self.with_connection(|c| {
-            Ok(c.query_row(
-                "SELECT building_id, plan_id, surveyor FROM survey_sessions WHERE id = ?1",
-                [session_id],
-                |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
-            )
-            .optional()?)
-        })?;
-        let (building_id, plan_id, settings) = row.ok_or_else(|| {
-            Error::NotFound(format!("session {session_id} is not in the database"))
-        })?;
+        let h = self.session_header(session_id)?;
+        let (building_id, plan_id, settings) = (h.building_id, h.plan_id, h.surveyor);
         let bad = |m: String| Error::Session {
             session: session_id,
             message: m,

@@ -66,19 +66,35 @@ pub struct BuildingInfo {
 /// [`MAX_IMPORT_BYTES`]: a regular file by its size before reading a byte, a stream after
 /// reading one byte more than the limit.
 pub fn read_import_text(path: &Path) -> Result<String> {
+    read_limited(
+        path,
+        MAX_IMPORT_BYTES,
+        "the import limit",
+        "a building file",
+    )
+}
+
+/// Reads `path` (`-`: standard input) as text of at most `limit` bytes; a larger input is
+/// refused naming `limit_name` and saying it is not `what`.
+pub(super) fn read_limited(
+    path: &Path,
+    limit: u64,
+    limit_name: &str,
+    what: &str,
+) -> Result<String> {
     let stdin = path == Path::new("-");
     let origin = if stdin {
         "<stdin>".to_string()
     } else {
         path.display().to_string()
     };
-    let too_big = |what: String| {
+    let too_big = |size: String| {
         Error::invalid(
             &origin,
             "$",
             format!(
-                "{what} over the import limit of {} MiB; it is not a building file",
-                MAX_IMPORT_BYTES / (1024 * 1024)
+                "{size} over {limit_name} of {} MiB; it is not {what}",
+                limit / (1024 * 1024)
             ),
         )
     };
@@ -86,24 +102,24 @@ pub fn read_import_text(path: &Path) -> Result<String> {
     if stdin {
         std::io::stdin()
             .lock()
-            .take(MAX_IMPORT_BYTES + 1)
+            .take(limit + 1)
             .read_to_string(&mut text)
             .map_err(|e| Error::io(&origin, e))?;
     } else {
         let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-        if len > MAX_IMPORT_BYTES {
+        if len > limit {
             return Err(too_big(format!(
                 "the file is {:.1} MiB,",
                 len as f64 / 1048576.0
             )));
         }
         // The size can grow after the check (a file being written): cap the read as well.
-        file.take(MAX_IMPORT_BYTES + 1)
+        file.take(limit + 1)
             .read_to_string(&mut text)
             .map_err(|e| Error::io(path, e))?;
     }
-    if text.len() as u64 > MAX_IMPORT_BYTES {
+    if text.len() as u64 > limit {
         return Err(too_big("the input is".into()));
     }
     Ok(text)

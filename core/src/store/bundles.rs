@@ -212,13 +212,36 @@ impl Store {
         Ok(doc.to_string())
     }
 
-    /// Imports a bundle (JSON text; `origin` names it in errors) in one transaction.
+    /// Imports a bundle (JSON text; `origin` names it in errors) in one transaction. A text
+    /// over [`MAX_BUNDLE_BYTES`] is refused before it is parsed.
     pub fn import_bundle(&self, text: &str, origin: &str) -> Result<BundleImportReport> {
+        if text.len() as u64 > MAX_BUNDLE_BYTES {
+            return Err(Error::invalid(
+                origin,
+                "$",
+                format!(
+                    "the bundle is {:.1} MiB, over the bundle limit of {} MiB",
+                    text.len() as f64 / 1048576.0,
+                    MAX_BUNDLE_BYTES / (1024 * 1024)
+                ),
+            ));
+        }
         let (bundle_id, body) = parse_bundle(text, origin)?;
         let building =
             Building::from_file(body.building.clone(), &format!("{origin}: body.building"))?;
         self.with_connection(|conn| import_in_tx(conn, &bundle_id, &body, &building, origin))
     }
+}
+
+/// Largest bundle [`Store::import_bundle`] accepts: 256 MiB, room for a few hundred
+/// thousand fingerprints, and a bound on the memory a corrupt or hostile file can make the
+/// phone spend parsing it.
+pub const MAX_BUNDLE_BYTES: u64 = 256 * 1024 * 1024;
+
+/// Reads a bundle file for [`Store::import_bundle`] (`-` reads standard input), refusing
+/// anything over [`MAX_BUNDLE_BYTES`] before reading it whole.
+pub fn read_bundle_text(path: &std::path::Path) -> Result<String> {
+    super::buildings::read_limited(path, MAX_BUNDLE_BYTES, "the bundle limit", "a bundle")
 }
 
 /// Parses and verifies a bundle; nothing is written.

@@ -21,6 +21,7 @@ mod export;
 mod fits;
 mod floorplans;
 pub mod migrations;
+mod planning;
 mod plans;
 mod sessions;
 
@@ -35,14 +36,19 @@ pub use buildings::{
 };
 pub use bundles::{
     BUNDLE_FORMAT, BundleBody, BundleEvent, BundleImportReport, BundlePlan, BundleSession,
-    ExportOptions, parse_bundle,
+    ExportOptions, MAX_BUNDLE_BYTES, parse_bundle, read_bundle_text,
 };
 pub use export::{collected_csv, collected_json};
 pub use fits::{FitRecord, StoredFit};
 pub use migrations::SCHEMA_VERSION;
+pub use planning::{
+    KernelSource, PlanningKernel, SavedPlan, SavedTeamPlan, StorePlanRequest, StoreTeamRequest,
+    unstored_planning_kernel,
+};
 pub use plans::{PlanRecord, StoredPlan};
 pub use sessions::{
-    CollectedFingerprint, SessionEvent, SessionInfo, SessionStatus, StoredCollected, StoredEvent,
+    CollectedFingerprint, SessionEvent, SessionHeader, SessionInfo, SessionProvenance,
+    SessionStatus, StoredCollected, StoredEvent,
 };
 
 use crate::building::BuildingFile;
@@ -252,14 +258,26 @@ impl Store {
     /// Appends pilot fingerprints to a building (a floor-plan import has none), checked as
     /// an import checks them; all or nothing. `origin` names the pilot file in errors.
     /// Returns how many pilot fingerprints the building has now.
+    ///
+    /// The building's earlier fits describe pilot data it no longer has, so when the new
+    /// pilot data can be fitted the fit is recorded: the planning kernel policy
+    /// ([`Store::planning_kernel`]) takes the latest fit, which is then the current one.
     pub fn add_pilot<'a>(
         &self,
         building: impl Into<BuildingRef<'a>>,
         pilot: &[crate::building::Fingerprint],
         origin: &str,
     ) -> Result<usize> {
+        let building = building.into();
         let db = self.name();
-        floorplans::add_pilot(&mut self.lock(), building.into(), pilot, origin, &db)
+        let n = floorplans::add_pilot(&mut self.lock(), building, pilot, origin, &db)?;
+        if n >= 3 {
+            // A pilot set the fitter refuses (no access point heard widely enough) keeps
+            // the pilot data; an earlier fit, if any, then stays the latest (known gap:
+            // fits do not record which pilot data they were made on).
+            let _ = self.fit_and_record(building);
+        }
+        Ok(n)
     }
 
     // ---- fits ----
@@ -291,6 +309,29 @@ impl Store {
         plan: &PlanRecord,
     ) -> Result<i64> {
         plans::save(&mut *self.lock_write()?, building.into(), plan)
+    }
+
+    /// Saves several plans of a building in one transaction (all or none); returns their
+    /// ids in order.
+    pub fn save_plans<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        plans: &[PlanRecord],
+    ) -> Result<Vec<i64>> {
+        plans::save_all(&mut *self.lock_write()?, building.into(), plans)
+    }
+
+    /// A session's building, plan and surveyor settings, by id.
+    pub fn session_header(&self, session_id: i64) -> Result<SessionHeader> {
+        sessions::header(&self.lock(), session_id)
+    }
+
+    /// The surveyor name and device of each session of a building, by session id.
+    pub fn session_provenance<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+    ) -> Result<Vec<SessionProvenance>> {
+        sessions::provenance(&self.lock(), building.into())
     }
 
     /// One plan by id.

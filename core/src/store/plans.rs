@@ -85,6 +85,21 @@ pub(super) fn save(
     Ok(out)
 }
 
+/// Saves several plans of one building in one transaction (a team's): all or none.
+pub(super) fn save_all(
+    conn: &mut Connection,
+    building: BuildingRef<'_>,
+    plans: &[PlanRecord],
+) -> Result<Vec<i64>> {
+    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
+    let ids = plans
+        .iter()
+        .map(|p| save_in(&tx, building, p))
+        .collect::<Result<Vec<i64>>>()?;
+    tx.commit()?;
+    Ok(ids)
+}
+
 /// [`save`] inside a transaction the caller owns (bundle import writes many
 /// sessions in one).
 pub(super) fn save_in(

@@ -525,3 +525,58 @@ pub(super) fn collected(
         Ok(out)
     })
 }
+
+/// Who walked a session and on which device (bundle provenance), by session id.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct SessionProvenance {
+    pub session_id: i64,
+    pub surveyor_name: Option<String>,
+    pub device: Option<String>,
+}
+
+/// A session's own row: its building, plan and surveyor settings (JSON text as stored).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SessionHeader {
+    pub building_id: i64,
+    pub plan_id: Option<i64>,
+    pub surveyor: Option<String>,
+}
+
+pub(super) fn header(conn: &Connection, session_id: i64) -> Result<SessionHeader> {
+    conn.query_row(
+        "SELECT building_id, plan_id, surveyor FROM survey_sessions WHERE id = ?1",
+        [session_id],
+        |r| {
+            Ok(SessionHeader {
+                building_id: r.get(0)?,
+                plan_id: r.get(1)?,
+                surveyor: r.get(2)?,
+            })
+        },
+    )
+    .optional()?
+    .ok_or_else(|| Error::NotFound(format!("session {session_id} is not in the database")))
+}
+
+pub(super) fn provenance(
+    conn: &Connection,
+    building: BuildingRef<'_>,
+) -> Result<Vec<SessionProvenance>> {
+    read_tx(conn, |conn| {
+        let bid = building_id(conn, building)?;
+        let mut st = conn.prepare(
+            "SELECT id, surveyor_name, device FROM survey_sessions WHERE building_id = ?1
+             ORDER BY id",
+        )?;
+        let rows = st
+            .query_map([bid], |r| {
+                Ok(SessionProvenance {
+                    session_id: r.get(0)?,
+                    surveyor_name: r.get(1)?,
+                    device: r.get(2)?,
+                })
+            })?
+            .collect::<rusqlite::Result<Vec<_>>>()?;
+        Ok(rows)
+    })
+}

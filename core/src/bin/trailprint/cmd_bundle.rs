@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::{Args as ClapArgs, Subcommand};
-use trailprint::store::{ExportOptions, read_import_text};
+use trailprint::store::{ExportOptions, read_bundle_text};
 use trailprint::{Error, Result};
 
 use crate::opts::json_line;
@@ -69,7 +69,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         }
         Action::Import { files, json } => {
             for f in files {
-                let text = read_import_text(&f)?;
+                let text = read_bundle_text(&f)?;
                 let r = store
                     .import_bundle(&text, &f.display().to_string())
                     .map_err(|e| match e {

@@ -62,15 +62,11 @@ pub struct Args {
 
 /// Surveyor name and device of each session of a stored building.
 fn people(store: &Store, building_id: i64) -> Result<SessionPeople> {
-    store.with_connection(|c| {
-        let mut st = c.prepare(
-            "SELECT id, surveyor_name, device FROM survey_sessions WHERE building_id = ?1",
-        )?;
-        let rows = st
-            .query_map([building_id], |r| Ok((r.get(0)?, (r.get(1)?, r.get(2)?))))?
-            .collect::<rusqlite::Result<SessionPeople>>()?;
-        Ok(rows)
-    })
+    Ok(store
+        .session_provenance(building_id)?
+        .into_iter()
+        .map(|p| (p.session_id, (p.surveyor_name, p.device)))
+        .collect())
 }
 
 pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {

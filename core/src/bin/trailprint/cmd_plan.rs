@@ -3,8 +3,9 @@
 use std::sync::Arc;
 
 use clap::Args as ClapArgs;
-use trailprint::plan::{Algorithm, Params, PlanRequest, plan_with_prior};
-use trailprint::store::PlanRecord;
+use trailprint::plan::{Algorithm, Params, PlanRequest, PlanSettings, plan};
+use trailprint::store::StorePlanRequest;
+use trailprint::team::SurveyorTask;
 use trailprint::{Error, Result};
 
 use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, RouteOpts, json_line};
@@ -68,18 +69,11 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let model = a.model.model()?;
-    let (kernel, source) = a.kernel.resolve(&b)?;
-    let time_limit = crate::opts::time_limit(a.time_limit)?;
-    let req = PlanRequest {
-        start: a.route.start.clone(),
-        end: a.route.end.clone(),
-        budget: a.route.budget,
-        model,
-        kernel,
+    let settings = PlanSettings {
+        model: a.model.model()?,
         algorithm: a.algorithm,
         seed: a.seed,
-        time_limit,
+        time_limit: crate::opts::time_limit(a.time_limit)?,
         params: Params {
             population: a.population,
             generations: a.generations,
@@ -91,22 +85,50 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         },
         memory_budget: a.memory_budget.saturating_mul(1 << 20),
     };
-    // A new walk should go where the data is thinnest: condition on everything already
-    // collected in this building (nothing for a building read from a file).
-    let prior = crate::store_cli::collected_prior(&a.building.building, db, &kernel)?;
+    let model = settings.model;
+    let route = a.route;
     let live = crate::progress::Live::start(a.progress);
-    let r = plan_with_prior(b.clone(), &req, &prior, &live.control);
-    live.finish();
-    let r = r?;
-    // A building from the database keeps its plans there; a file has nowhere to keep them.
-    let plan_id = if crate::store_cli::is_file_spec(&a.building.building) {
-        None
+    // A building from the database is planned by the store, as on the phone (its kernel
+    // policy, conditioned on everything collected, saved); a file has nowhere to keep a
+    // fit or a plan, and nothing collected.
+    let planned = if crate::store_cli::is_file_spec(&a.building.building) {
+        a.kernel.resolve(&b).and_then(|(kernel, source)| {
+            let req = PlanRequest::with_settings(
+                &route.start,
+                &route.end,
+                route.budget,
+                kernel,
+                &settings,
+            );
+            let r = plan(b.clone(), &req, &live.control)?;
+            Ok((r, None, kernel, source, 0))
+        })
     } else {
-        let store = crate::store_cli::open_store(db)?;
-        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
-        let record = PlanRecord::from_plan(&req, &r, trailprint::store::now_ms());
-        Some(store.save_plan(bref, &record)?)
+        crate::store_cli::open_store(db).and_then(|store| {
+            let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+            let request = StorePlanRequest {
+                route: SurveyorTask {
+                    start: route.start.clone(),
+                    end: route.end.clone(),
+                    budget: route.budget,
+                },
+                settings,
+                kernel: a.kernel.kernel,
+            };
+            let saved = store
+                .plan_and_save(bref, &request, &live.control)
+                .map_err(|e| crate::opts::hint(e, &b))?;
+            Ok((
+                saved.result,
+                Some(saved.stored.id),
+                saved.kernel.kernel,
+                saved.kernel.source.to_string(),
+                saved.conditioned_on,
+            ))
+        })
     };
+    live.finish();
+    let (r, plan_id, kernel, source, conditioned_on) = planned?;
     if a.json {
         let mut v = serde_json::to_value(&r)
             .map_err(|e| Error::InvalidRequest(format!("JSON output: {e}")))?;
@@ -118,18 +140,15 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         if let Some(id) = plan_id {
             println!("plan id       {id}");
         }
-        if !prior.is_empty() {
-            println!(
-                "conditioned   on {} fingerprints already collected",
-                prior.len()
-            );
+        if conditioned_on > 0 {
+            println!("conditioned   on {conditioned_on} fingerprints already collected");
         }
         println!("building      {}", crate::store_cli::printable(&b.name));
         println!("algorithm     {}", r.algorithm);
         println!(
             "route         {} -> {}",
-            crate::store_cli::printable(&a.route.start),
-            crate::store_cli::printable(&a.route.end)
+            crate::store_cli::printable(&route.start),
+            crate::store_cli::printable(&route.end)
         );
         println!(
             "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",

@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use clap::Args as ClapArgs;
 use trailprint::Result;
-use trailprint::plan::{Algorithm, PlanRequest};
-use trailprint::store::PlanRecord;
+use trailprint::plan::{Algorithm, PlanSettings};
+use trailprint::store::StoreTeamRequest;
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
 
 use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
@@ -47,42 +47,56 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let (kernel, source) = a.kernel.resolve(&b)?;
-    let mut base = PlanRequest::new("", "", 0.0, kernel);
-    base.model = a.model.model()?;
-    base.algorithm = a.algorithm;
-    base.seed = a.seed;
-    base.time_limit = crate::opts::time_limit(a.time_limit)?;
-    let prior = if a.ignore_collected {
-        Vec::new()
-    } else {
-        crate::store_cli::collected_prior(&a.building.building, db, &kernel)?
+    let settings = PlanSettings {
+        model: a.model.model()?,
+        algorithm: a.algorithm,
+        seed: a.seed,
+        time_limit: crate::opts::time_limit(a.time_limit)?,
+        ..PlanSettings::default()
     };
-    let req = TeamRequest {
-        surveyors: a.surveyors,
-        base,
-        independent: a.independent,
-        rounds: a.rounds,
-    };
-    let team = plan_team(b.clone(), &req, &prior, &trailprint::plan::Control::new())?;
-    // A building of the database keeps each surveyor's walk as a plan, so that
-    // `plans show ID` and `render --team ID --team ID` find them; a file has nowhere.
-    let plan_ids: Vec<i64> = if crate::store_cli::is_file_spec(&a.building.building) {
-        Vec::new()
-    } else {
-        let store = crate::store_cli::open_store(db)?;
-        let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
-        let now = trailprint::store::now_ms();
-        let mut ids = Vec::new();
-        for (task, p) in req.surveyors.iter().zip(&team.plans) {
-            let mut one = req.base.clone();
-            one.start = task.start.clone();
-            one.end = task.end.clone();
-            one.budget = task.budget;
-            ids.push(store.save_plan(bref, &PlanRecord::from_plan(&one, p, now))?);
-        }
-        ids
-    };
+    let control = trailprint::plan::Control::new();
+    // A building from the database is planned and saved by the store, as on the phone; a
+    // file has nowhere to keep the plans, nothing collected and no stored fit.
+    let (team, plan_ids, kernel, source, conditioned_on) =
+        if crate::store_cli::is_file_spec(&a.building.building) {
+            let (kernel, source) = a.kernel.resolve(&b)?;
+            let req = TeamRequest {
+                surveyors: a.surveyors,
+                kernel,
+                settings,
+                independent: a.independent,
+                rounds: a.rounds,
+            };
+            (
+                plan_team(b.clone(), &req, &[], &control)?,
+                Vec::new(),
+                kernel,
+                source,
+                0,
+            )
+        } else {
+            let store = crate::store_cli::open_store(db)?;
+            let bref = crate::store_cli::building_ref(&store, &a.building.building)?;
+            let req = StoreTeamRequest {
+                members: a.surveyors,
+                settings,
+                kernel: a.kernel.kernel,
+                independent: a.independent,
+                rounds: a.rounds,
+                condition_on_collected: !a.ignore_collected,
+            };
+            let saved = store
+                .plan_team_and_save(bref, &req, &control)
+                .map_err(|e| crate::opts::hint(e, &b))?;
+            let source = saved.kernel.source.to_string();
+            (
+                saved.team,
+                saved.plan_ids,
+                saved.kernel.kernel,
+                source,
+                saved.conditioned_on,
+            )
+        };
     if a.json {
         let out = serde_json::json!({
             "walks": team.plans.iter().map(|p| p.walk.clone()).collect::<Vec<_>>(),
@@ -92,9 +106,9 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "samples": team.plans.iter().map(|p| p.samples).collect::<Vec<_>>(),
             "independent": team.independent,
             "rounds_used": team.rounds_used,
-            "conditioned_on_collected": prior.len(),
-            "kernel": kernel,
+            "conditioned_on_collected": conditioned_on,
             "plan_ids": plan_ids,
+            "kernel": kernel,
         });
         println!("{}", json_line(&out)?);
     } else {
@@ -103,13 +117,13 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "kernel          sf2={:.4} ell={:.4} sn2={:.4} ({source})",
             kernel.sf2, kernel.ell, kernel.sn2
         );
-        if !prior.is_empty() {
-            println!(
-                "conditioned on  {} fingerprints already collected",
-                prior.len()
-            );
+        if conditioned_on > 0 {
+            println!("conditioned on  {conditioned_on} fingerprints already collected");
         }
         for (i, p) in team.plans.iter().enumerate() {
+            if let Some(id) = plan_ids.get(i) {
+                println!("surveyor {}      plan id {id}", i + 1);
+            }
             println!(
                 "surveyor {}      {}{:.1} m, {} samples, {:.3} nats alone: {}",
                 i + 1,

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use clap::{Args as ClapArgs, ValueEnum};
 use trailprint::building::Building;
-use trailprint::gp::{Kernel, fit_kernel};
+use trailprint::gp::Kernel;
 use trailprint::samples::SurveyorModel;
 use trailprint::{Error, Result};
 
@@ -49,26 +49,29 @@ pub fn parse_kernel(s: &str) -> std::result::Result<Kernel, String> {
 }
 
 impl KernelOpts {
-    /// The kernel to use for `b`, and where it came from (`option`, `file` or `fit`).
-    pub fn resolve(&self, b: &Building) -> Result<(Kernel, &'static str)> {
-        if let Some(k) = self.kernel {
-            return Ok((k, "option"));
-        }
-        if let Some(k) = b.kernel {
-            return Ok((k, "file"));
-        }
-        if b.pilot.len() < 3 {
-            // A building made from a floor plan has no pilot data: say what would do.
-            return Err(Error::Fit(format!(
-                "building {:?} has {} pilot fingerprint(s) and no kernel; give one with \
-                 --kernel SF2,ELL,SN2 (for example --kernel 40,6,9), or add pilot data (at \
-                 least 3 locations) with `trailprint pilot add {:?} PILOT.json`",
-                b.name,
-                b.pilot.len(),
-                b.name
-            )));
-        }
-        Ok((fit_kernel(&b.pilot)?.kernel, "fit"))
+    /// The kernel to use for `b`, a building outside the database's bookkeeping, and where
+    /// it came from: the core's policy ([`trailprint::store::unstored_planning_kernel`]:
+    /// option, file, fit). Planning a stored building goes through
+    /// `Store::plan_and_save`, which also takes the building's latest stored fit.
+    pub fn resolve(&self, b: &Building) -> Result<(Kernel, String)> {
+        let k =
+            trailprint::store::unstored_planning_kernel(b, self.kernel).map_err(|e| hint(e, b))?;
+        Ok((k.kernel, k.source.to_string()))
+    }
+}
+
+/// A fit error of a building without pilot data, with what to type to fix it.
+pub fn hint(e: Error, b: &Building) -> Error {
+    match e {
+        Error::Fit(_) if b.pilot.len() < 3 => Error::Fit(format!(
+            "building {:?} has {} pilot fingerprint(s) and no kernel; give one with \
+             --kernel SF2,ELL,SN2 (for example --kernel 40,6,9), or add pilot data (at \
+             least 3 locations) with `trailprint pilot add {:?} PILOT.json`",
+            b.name,
+            b.pilot.len(),
+            b.name
+        )),
+        other => other,
     }
 }
 

@@ -230,18 +230,3 @@ pub fn printable(name: &str) -> String {
         .replace("\\\"", "\"")
         .replace("\\'", "'")
 }
-
-/// Everything collected so far in `spec`'s building (nothing for a building read from a
-/// file); see [`trailprint::Store::collected_observations`].
-pub fn collected_prior(
-    spec: &str,
-    db: Option<&Path>,
-    kernel: &trailprint::gp::Kernel,
-) -> Result<Vec<trailprint::utility::Observation>> {
-    if is_file_spec(spec) {
-        return Ok(Vec::new());
-    }
-    let store = open_store(db)?;
-    let bref = building_ref(&store, spec)?;
-    store.collected_observations(bref, kernel)
-}
