@@ -468,6 +468,12 @@ pub struct Run {
     best: Arc<std::sync::Mutex<Option<Incumbent>>>,
     /// Length of the best walk so far, for progress reports (f64 bits; NaN: none).
     best_length: Arc<std::sync::atomic::AtomicU64>,
+    /// The algorithm the user asked for: every report carries it, whichever stage or
+    /// sub-search sends it (set by [`plan_with_prior`]).
+    algorithm: Option<Algorithm>,
+    /// Highest fraction and best utility reported so far (f64 bits): what a progress bar
+    /// shows never goes back, though stages and parallel subtrees report out of order.
+    reported: Arc<std::sync::Mutex<(f64, Option<f64>)>>,
 }
 
 impl Run {
@@ -485,7 +491,15 @@ impl Run {
             deadline: time_limit.map(|t| started + t),
             best: Arc::default(),
             best_length: Arc::new(std::sync::atomic::AtomicU64::new(f64::NAN.to_bits())),
+            algorithm: None,
+            reported: Arc::new(std::sync::Mutex::new((0.0, None))),
         }
+    }
+
+    /// Reports of this run name `algorithm`, whatever stage sends them.
+    pub fn for_algorithm(mut self, algorithm: Algorithm) -> Self {
+        self.algorithm = Some(algorithm);
+        self
     }
 
     /// Offers a feasible walk (start to end, within budget) with its exact utility; the
@@ -584,12 +598,25 @@ impl Run {
     }
 
     /// Sends a progress report to the observer, if any.
+    ///
+    /// What the observer sees is consistent whatever the stage: the requested algorithm,
+    /// a fraction that never goes back, and the best utility so far (the larger of the
+    /// stage's own figure, the best walk offered, and what was reported before).
     pub fn report(&self, algorithm: Algorithm, fraction: f64, best: Option<f64>, msg: String) {
         if let Some(o) = &self.control.observer {
             let len = f64::from_bits(self.best_length.load(Ordering::Relaxed));
+            let offered = self.incumbent().map(|(_, u)| u);
+            let (fraction, best) = {
+                let mut r = self.reported.lock().unwrap_or_else(|e| e.into_inner());
+                r.0 = r.0.max(fraction.clamp(0.0, 1.0));
+                for u in [best, offered].into_iter().flatten() {
+                    r.1 = Some(r.1.map_or(u, |b: f64| b.max(u)));
+                }
+                *r
+            };
             o.progress(&Progress {
-                algorithm,
-                fraction: fraction.clamp(0.0, 1.0),
+                algorithm: self.algorithm.unwrap_or(algorithm),
+                fraction,
                 best_utility: best,
                 best_length: (best.is_some() && len.is_finite()).then_some(len),
                 message: msg,
@@ -866,7 +893,8 @@ pub fn plan_with_prior(
     let started = Instant::now();
     let (start, end) = validate(&building, req)?;
     check_memory(&building, req, prior.len())?;
-    let run = Run::starting_at(control.clone(), req.effective_time_limit(), started);
+    let run = Run::starting_at(control.clone(), req.effective_time_limit(), started)
+        .for_algorithm(req.algorithm);
     let metric = Arc::new(Metric::new(&building));
     let shortest = metric.dist(start, end);
     if !shortest.is_finite() || shortest > req.budget + BUDGET_EPS {
@@ -991,6 +1019,9 @@ fn finish(problem: &Problem, req: &PlanRequest, out: Outcome, run: &Run) -> Resu
     })?;
     let b = &problem.building;
     let samples = sample_walk(b, &out.walk, &req.model, &req.kernel)?.len();
+    // The last report is the result itself, so that "best so far" ends at what is returned.
+    problem.offer(run, &out.walk, out.utility);
+    run.report(req.algorithm, 1.0, Some(out.utility), "done".into());
     Ok(PlanResult {
         algorithm: req.algorithm,
         walk: b.walk_ids(&out.walk),
