@@ -542,6 +542,8 @@ impl Run {
             deadline,
             best: self.best.clone(),
             best_length: self.best_length.clone(),
+            algorithm: self.algorithm,
+            reported: self.reported.clone(),
         }
     }
 
