@@ -50,6 +50,7 @@ max_len=${FUZZ_MAX_LEN:-65536}
 
 echo "== building the fuzz targets (cargo +nightly fuzz build)"
 nice -n "$nice_n" cargo +nightly fuzz build -O --debug-assertions
+bin_dir=target/$(rustc +nightly -vV | sed -n 's/^host: //p')/release
 
 found=0
 summary=()
@@ -61,8 +62,9 @@ for t in "${targets[@]}"; do
   before=$(find "$art" -type f | wc -l)
   echo "== $t: ${secs}s (log $log)"
   start=$(date +%s)
-  # Fork mode: crashes, OOMs and timeouts are counted and kept, and fuzzing goes on.
-  nice -n "$nice_n" cargo +nightly fuzz run -O --debug-assertions "$t" "$work" "corpus/$t" -- \
+  # Fork mode: crashes, OOMs and timeouts are counted and kept, and fuzzing goes on. The
+  # binary is run directly: after a crash `cargo fuzz run` rebuilds to print the input.
+  nice -n "$nice_n" "$bin_dir/$t" "$work" "corpus/$t" \
     -fork=1 -ignore_crashes=1 -ignore_ooms=1 -ignore_timeouts=1 \
     -max_total_time="$secs" -rss_limit_mb="$rss" -malloc_limit_mb="$malloc" \
     -timeout="$timeout" -max_len="$max_len" -print_final_stats=1 \
