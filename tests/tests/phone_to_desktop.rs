@@ -169,7 +169,7 @@ fn the_phone_and_the_command_line_plan_one_building_with_one_kernel() {
         building_id: b.id,
         start: "f0-c00".into(),
         end: "f0-r5-door".into(),
-        budget_m: 25.0,
+        budget_m: 30.0,
         surveyor: default_robot_profile(),
         algorithm: PlanAlgorithm::Greedy,
         seed: 3,
@@ -185,7 +185,7 @@ fn the_phone_and_the_command_line_plan_one_building_with_one_kernel() {
                 route: trailprint::team::SurveyorTask {
                     start: "f0-c00".into(),
                     end: "f0-r5-door".into(),
-                    budget: 25.0,
+                    budget: 30.0,
                 },
                 settings: trailprint::plan::PlanSettings {
                     algorithm: trailprint::plan::Algorithm::Greedy,
