@@ -31,6 +31,7 @@ mod store_api;
 mod store_bad_inputs;
 mod store_bundles;
 mod store_migrations;
+mod store_planning;
 mod store_readers;
 mod store_schema;
 mod utility_props;

@@ -5,7 +5,7 @@
 
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
-mod store_common;
+use crate::store_common;
 
 use trailprint::gp::{Kernel, fit_kernel};
 use trailprint::plan::{Algorithm, Control, PlanSettings};
