@@ -7,15 +7,30 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 LOG="${TMPDIR:-/tmp}/trailprint-cargo-test.$$.log"
-echo "== Rust: cargo test --workspace (unit, integration, binaries)"
-cargo test --workspace --lib --bins --tests 2>&1 | tee "$LOG"
+: >"$LOG"
+failed=()
+# Each step runs to its end (--no-fail-fast: one failing test binary does not hide the
+# others) and the script reports every step that failed.
+step() {
+  local name="$1"; shift
+  echo "== $name"
+  if ! "$@" 2>&1 | tee -a "$LOG"; then failed+=("$name"); fi
+}
+step "Rust: cargo test --workspace (unit, integration, binaries)" \
+  cargo test --workspace --no-fail-fast --lib --bins --tests
 # Doc tests run separately (the target selection above skips them).
-cargo test --workspace --doc 2>&1 | tee -a "$LOG"
+step "Rust: doc tests" cargo test --workspace --no-fail-fast --doc
 # Examples and benchmarks must keep compiling; running them is the benchmarks' job, not
 # CI's (a type check is a fraction of an optimised build and link of six binaries).
-cargo check --workspace --examples --benches --profile test 2>&1 | tee -a "$LOG"
+step "Rust: examples and benchmarks compile" \
+  cargo check --workspace --examples --benches --profile test
 
 if [ -x android-demo/scripts/kotlin-test.sh ]; then
-  echo "== Kotlin: host JVM tests against the native library"
-  android-demo/scripts/kotlin-test.sh
+  step "Kotlin: host JVM tests against the native library" android-demo/scripts/kotlin-test.sh
 fi
+
+if [ "${#failed[@]}" -gt 0 ]; then
+  echo "test-all: FAILED steps:"; printf '  - %s\n' "${failed[@]}"
+  exit 1
+fi
+echo "test-all: every step passed"

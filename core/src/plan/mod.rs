@@ -883,8 +883,10 @@ pub fn plan(building: Arc<Building>, req: &PlanRequest, control: &Control) -> Re
 
 /// Plans a walk whose utility is conditioned on the pilot data plus `prior`
 /// observations: samples already collected (replanning a survey in progress) or the walks
-/// of other surveyors (team planning). The utility reported is then the information the
-/// walk adds on top of all of them, `f_{D + prior}(P)`.
+/// of other surveyors (team planning). The utility reported is then `f_{D + prior}(P)`:
+/// SPEC section 3 with `S = R(P) ∪ D ∪ prior`, so it counts what the prior already knows;
+/// what the walk adds on top is that minus [`UtilityEngine::prior_utility`] of an engine
+/// built with the same prior.
 pub fn plan_with_prior(
     building: Arc<Building>,
     req: &PlanRequest,
