@@ -5,7 +5,11 @@ walk on generated buildings of about 130, 290 (two floors), 565 and 5,000 vertic
 `trailprint plan` process under /usr/bin/time, so the wall time and the peak memory are
 the whole process's (set-up included).
 
-    python3 scripts/bench_scale.py [--long 60] [--model robot|human] [--out docs/benchmark-scale.md]
+    python3 scripts/bench_scale.py [--long 60] [--model robot,human] [--cpu 0] [--out docs/benchmark-scale.md]
+
+Every plan is pinned to one core (`taskset -c CPU`, RAYON_NUM_THREADS=1), as the targets
+are stated; the summary lines check the targets (ratios, 2 s against the long run, budget
+monotonicity).
 
 --long S adds an `auto` run with an S-second limit on every row (the 97% target).
 Needs the release binary: cargo build --release -p trailprint-core --bin trailprint.
@@ -14,6 +18,7 @@ import argparse, json, math, os, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "target", "release", "trailprint")
+CPU = "0"
 BUILDINGS = [
     ("office", ["--rooms", "4", "--corridor-length", "40", "--room-depth", "8"]),
     ("campus", ["--floors", "2", "--rooms", "6", "--corridor-length", "48", "--room-depth", "8"]),
@@ -42,12 +47,14 @@ def degrees(path):
 
 
 def plan(path, budget, alg, limit, model, seed=1):
-    cmd = ["/usr/bin/time", "-f", "%e %M", BIN, "plan", "--building", path, "--start", "f0-c00",
+    # One core, as the targets are stated: pinned, and rayon told so.
+    cmd = ["taskset", "-c", CPU, "/usr/bin/time", "-f", "%e %M", BIN, "plan", "--building", path, "--start", "f0-c00",
            "--end", "f0-c00", "--budget", f"{budget:.1f}", "--algorithm", alg, "--model", model,
            "--seed", str(seed), "--json"]
     if limit is not None:
         cmd += ["--time-limit", str(limit)]
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     wall, rss = p.stderr.strip().splitlines()[-1].split()
     out = {"wall_s": float(wall), "rss_mb": int(rss) / 1024}
     if p.returncode != 0:
@@ -65,12 +72,15 @@ def plan(path, budget, alg, limit, model, seed=1):
 
 
 def main():
+    global CPU
     ap = argparse.ArgumentParser()
     ap.add_argument("--long", type=float, default=0)
-    ap.add_argument("--model", default="robot")
-    ap.add_argument("--only", default="")
+    ap.add_argument("--model", default="robot,human", help="comma-separated: robot, human")
+    ap.add_argument("--only", default="", help="comma-separated building names")
+    ap.add_argument("--cpu", default="0", help="the core every plan is pinned to")
     ap.add_argument("--out", default="")
     a = ap.parse_args()
+    CPU = a.cpu
     tmp = tempfile.mkdtemp()
     rows = []
     for name, args in BUILDINGS:
@@ -80,29 +90,48 @@ def main():
         subprocess.run([BIN, "generate", "--out", path, "--name", name, *args], check=True,
                        capture_output=True)
         nv, tot = total_length(path)
-        for frac in (0.25, 0.5, 1.0):
-            budget = frac * tot
-            cov = plan(path, budget, "coverage", None, a.model)
-            auto = plan(path, budget, "auto", None, a.model)
-            row = dict(building=name, vertices=nv, edges_m=tot, budget=budget, coverage=cov, auto=auto)
-            if a.long:
-                row["auto_long"] = plan(path, budget, "auto", a.long, a.model)
-            rows.append(row)
-            print(json.dumps(row), file=sys.stderr, flush=True)
-    lines = [f"| building | vertices | budget m | coverage nats | auto nats | auto / coverage | auto length / budget | auto wall s | auto peak MiB | reversals per 100 m |" + (f" auto {a.long:g} s nats | 2 s / {a.long:g} s |" if a.long else ""),
-             "|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if a.long else "")]
+        for model in a.model.split(","):
+            for frac in (0.25, 0.5, 1.0):
+                budget = frac * tot
+                cov = plan(path, budget, "coverage", None, model)
+                auto = plan(path, budget, "auto", None, model)
+                row = dict(building=name, model=model, vertices=nv, edges_m=tot, budget=budget,
+                           coverage=cov, auto=auto)
+                if a.long:
+                    row["auto_long"] = plan(path, budget, "auto", a.long, model)
+                rows.append(row)
+                print(json.dumps(row), file=sys.stderr, flush=True)
+    long_h = f" auto {a.long:g} s nats | 2 s / {a.long:g} s |" if a.long else ""
+    lines = ["| building | model | vertices | budget m | coverage nats | auto nats | auto / coverage | auto length / budget | auto wall s | auto peak MiB | reversals per 100 m |" + long_h,
+             "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if a.long else "")]
+    ratios, long_ratios, notes = [], [], []
     for r in rows:
         c, u = r["coverage"], r["auto"]
         if "error" in u:
-            lines.append(f"| {r['building']} | {r['vertices']} | {r['budget']:.0f} | {c.get('utility', float('nan')):.2f} | refused: {u['error'][:160]} | | | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | |" + (" | |" if a.long else ""))
+            lines.append(f"| {r['building']} | {r['model']} | {r['vertices']} | {r['budget']:.0f} | {c.get('utility', float('nan')):.2f} | refused: {u['error'][:200]} | | | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | |" + (" | |" if a.long else ""))
             continue
-        line = (f"| {r['building']} | {r['vertices']} | {r['budget']:.0f} | {c['utility']:.2f} | {u['utility']:.2f} | "
-                f"{u['utility'] / c['utility']:.3f} | {u['length'] / r['budget']:.3f} | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | {u['reversals_per_100m']:.2f} |")
+        ratio = u["utility"] / c["utility"]
+        ratios.append(ratio)
+        line = (f"| {r['building']} | {r['model']} | {r['vertices']} | {r['budget']:.0f} | {c['utility']:.2f} | {u['utility']:.2f} | "
+                f"{ratio:.3f} | {u['length'] / r['budget']:.3f} | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | {u['reversals_per_100m']:.2f} |")
         if a.long:
             l = r["auto_long"]
-            line += f" {l.get('utility', float('nan')):.2f} | {u['utility'] / l.get('utility', float('nan')):.3f} |"
+            lr = u["utility"] / l.get("utility", float("nan"))
+            long_ratios.append(lr)
+            line += f" {l.get('utility', float('nan')):.2f} | {lr:.3f} |"
         lines.append(line)
-    text = "\n".join(lines)
+    # Budget monotonicity: per building and model, utility must not fall as the budget grows.
+    by = {}
+    for r in rows:
+        if "utility" in r["auto"]:
+            by.setdefault((r["building"], r["model"]), []).append((r["budget"], r["auto"]["utility"]))
+    mono = all(all(b[1] >= a_[1] for a_, b in zip(v, v[1:])) for v in by.values())
+    if ratios:
+        notes.append(f"auto / coverage: mean {sum(ratios) / len(ratios):.3f}, min {min(ratios):.3f} over {len(ratios)} rows")
+    if long_ratios:
+        notes.append(f"auto 2 s / auto {a.long:g} s: min {min(long_ratios):.3f}")
+    notes.append("utility grows with the budget on every building and model: " + ("yes" if mono else "NO"))
+    text = "\n".join(lines + [""] + [f"- {n}" for n in notes])
     print(text)
     if a.out:
         open(a.out, "w").write(text + "\n")

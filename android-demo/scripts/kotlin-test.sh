@@ -78,18 +78,31 @@ target_dir="${CARGO_TARGET_DIR:-}"
 if [[ -z "$target_dir" ]]; then
   target_dir="$(cargo metadata --format-version 1 --no-deps | python3 -c 'import json,sys; print(json.load(sys.stdin)["target_directory"])')"
 fi
-cargo_flags=(-p trailprint-bindings -p trailprint-uniffi-bindgen --profile "$profile")
-log "cargo build ${cargo_flags[*]} (target $target_dir)"
-cargo build -q "${cargo_flags[@]}" >&2
 case "$profile" in # the output folder: dev and test share target/debug
-  dev | test) libdir="$target_dir/debug" ;;
-  *) libdir="$target_dir/$profile" ;;
+  dev | test) outdir="$target_dir/debug" ;;
+  *) outdir="$target_dir/$profile" ;;
 esac
 case "$(uname -s)" in
-  Darwin) lib="$libdir/libtrailprint_ffi.dylib" ;;
-  *) lib="$libdir/libtrailprint_ffi.so" ;;
+  Darwin) libname="libtrailprint_ffi.dylib" ;;
+  *) libname="libtrailprint_ffi.so" ;;
 esac
+bindgen="$outdir/uniffi-bindgen"
+if [[ -n "${TRAILPRINT_PREBUILT:-}" ]]; then
+  # scripts/test-all.sh: `cargo test --workspace` has just built the library (as a
+  # dependency of the bindgen test, into deps/) and the generator (for that test). A
+  # `cargo build -p trailprint-bindings` would resolve features without the workspace's
+  # dev-dependencies and compile the core a second time (minutes on two cores).
+  libdir="$outdir/deps"
+  log "using the library and generator the Rust tests built ($libdir)"
+else
+  cargo_flags=(-p trailprint-bindings -p trailprint-uniffi-bindgen --profile "$profile")
+  log "cargo build ${cargo_flags[*]} (target $target_dir)"
+  cargo build -q "${cargo_flags[@]}" >&2
+  libdir="$outdir"
+fi
+lib="$libdir/$libname"
 [[ -f "$lib" ]] || { log "no native library at $lib"; exit 1; }
+[[ -x "$bindgen" ]] || { log "no uniffi-bindgen at $bindgen"; exit 1; }
 
 # Regenerate the bindings only when the library changed.
 stamp="$gen/.library.sha256"
@@ -98,7 +111,7 @@ if [[ "$(cat "$stamp" 2>/dev/null)" != "$lib_hash" ]]; then
   log "generating Kotlin bindings into ${gen#"$repo"/}"
   rm -rf "$gen"
   mkdir -p "$gen"
-  "$libdir/uniffi-bindgen" generate --library "$lib" --language kotlin --out-dir "$gen" --no-format >&2
+  "$bindgen" generate --library "$lib" --language kotlin --out-dir "$gen" --no-format >&2
   echo "$lib_hash" >"$stamp"
 fi
 

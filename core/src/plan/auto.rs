@@ -3,9 +3,13 @@
 //! so far, sized by a deterministic work budget and capped by the time limit (2 s by
 //! default).
 //!
+//! 0. **Spread constructions** ([`super::scale::best_construction`]): walks that use the
+//!    whole budget, spread over the building, judged exactly and offered at once, so a
+//!    plan stopped early (time limit on a busy phone, cancel) still returns a walk of the
+//!    full budget.
 //! 1. **Greedy**, the feasible-candidates variant of the paper's Algorithm 1 (the
 //!    paper's rule stops as soon as the best-ratio vertex does not fit, which on a closed
-//!    walk can be the very first round).
+//!    walk can be the very first round); the better of it and stage 0 goes on.
 //! 2. **Local search** ([`LocalSearch`]) from the greedy walk: detour insert, segment
 //!    replace, re-route, shortcut and 2-opt moves, evaluated in parallel from the shared
 //!    prefix.
@@ -155,10 +159,21 @@ impl Solver for Auto {
         let mut used = 0usize;
         let report = |f: f64, u: f64, m: &str| run.report(Algorithm::Auto, f, Some(u), m.into());
 
+        // 0. Spread constructions that use the whole budget, evaluated exactly and
+        //    offered at once: what a time-out or a cancel returns if greedy (which grows
+        //    its walk from the start outwards) is cut short on a busy phone.
+        let (spread, spread_u) = super::scale::best_construction(p, run, &[0.0, 0.25, 0.5])?;
+        used += 3;
+        report(0.05, spread_u, "spread construction");
+
         // 1. Greedy.
         let g = Greedy::feasible().solve(p, run)?;
         let (mut walk, mut util) = (g.walk, g.utility);
         used += p.building.len() * 4;
+        if better((&spread, spread_u), (&walk, util)) {
+            walk = spread.clone();
+            util = spread_u;
+        }
         report(0.1, util, "greedy");
 
         // 2. Local search from the greedy walk.
@@ -190,7 +205,7 @@ impl Solver for Auto {
             let gens = prm.generations.max(1);
             let afford = (budget_evals as f64 * 0.4 / (gens + 1) as f64) as usize;
             prm.population = prm.population.min(afford).max(20);
-            let ga = Genetic::new(prm, self.seed).with_seeds(vec![walk.clone(), greedy_walk]);
+            let ga = Genetic::new(prm, self.seed).with_seeds(vec![walk.clone(), greedy_walk, spread]);
             let (pp, _) = ga.evolve(p, run)?;
             used += prm.population * (gens + 1);
             if let Some(b) = pp.first()

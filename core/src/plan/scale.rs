@@ -186,6 +186,53 @@ fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
     Ok(penalised(p, walk, s.value(walk)?))
 }
 
+/// The spread construction of a whole walk (start to end, the whole budget), nearest edge
+/// first, avoiding reversals for a person.
+fn whole_walk(p: &Problem) -> Leg {
+    Leg {
+        from: p.start,
+        prev: None,
+        to: p.end,
+        budget: p.budget,
+        radius: 0.0,
+        any_fit: true,
+        avoid_reversals: matches!(p.engine.model(), SurveyorModel::Human { .. }),
+    }
+}
+
+/// The best of the spread constructions for novelty radii `radii_ell` (in units of the
+/// kernel's length scale) by exact utility, offered to `run`: a walk of the whole budget
+/// (reversals repaired for a person), the small-building portfolio's first incumbent.
+pub fn best_construction(p: &Problem, run: &Run, radii_ell: &[f64]) -> Result<(Vec<usize>, f64)> {
+    let ell = p.engine.kernel().ell;
+    let base = whole_walk(p);
+    let built: Vec<(Vec<usize>, Result<f64>)> = radii_ell
+        .par_iter()
+        .map(|&r| {
+            let w = for_surveyor(p, leg(p, &Leg { radius: r * ell, ..base }, &[], None, run));
+            let u = p.utility(&w);
+            (w, u)
+        })
+        .collect();
+    let mut best: Option<(Vec<usize>, f64, f64)> = None;
+    for (w, u) in built {
+        let u = u?;
+        p.offer(run, &w, u);
+        let s = penalised(p, &w, u);
+        if best.as_ref().is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs))) {
+            best = Some((w, u, s));
+        }
+    }
+    match best {
+        Some((w, u, _)) => Ok((w, u)),
+        None => {
+            let w = p.shortest_walk();
+            let u = p.utility(&w)?;
+            Ok((w, u))
+        }
+    }
+}
+
 /// Statistics of a large-building search, for progress messages and the benchmark.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Stats {
@@ -212,15 +259,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         .iter()
         .map(|f| f * ell)
         .collect();
-    let base = Leg {
-        from: p.start,
-        prev: None,
-        to: p.end,
-        budget: p.budget,
-        radius: 0.0,
-        any_fit: true,
-        avoid_reversals: human,
-    };
+    let base = whole_walk(p);
     let built: Vec<(Vec<usize>, f64)> = radii
         .par_iter()
         .map(|&r| {
@@ -378,9 +417,8 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             out = Some((w, u, s));
         }
     }
-    let (walk, utility) = out
-        .map(|(w, u, _)| (w, u))
-        .unwrap_or_else(|| (p.shortest_walk(), 0.0));
+    // `finalists` always holds the best construction and the systematic walk.
+    let (walk, utility, _) = out.expect("at least two finalists");
     let term = if run.out_of_time() {
         Termination::TimeLimit
     } else {

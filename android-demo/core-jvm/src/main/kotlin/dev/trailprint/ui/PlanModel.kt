@@ -1,6 +1,7 @@
 package dev.trailprint.ui
 
 import dev.trailprint.PlanEvent
+import dev.trailprint.RunningPlan
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.PlanAlgorithm
