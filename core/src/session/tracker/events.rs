@@ -10,7 +10,6 @@ use crate::session::types::{
 };
 
 impl Tracker {
-
     /// Whether `ev` can be accepted now; changes nothing. The error names what is wrong.
     pub fn check(&self, b: &Building, ev: &Event) -> Result<()> {
         match self.status {

@@ -39,7 +39,7 @@ use super::replan::distances_from;
 use super::types::{CollectedSample, Event, Position, SessionOptions, SessionStatus, Surveyor};
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
-use crate::samples::is_turn_checkin;
+use crate::samples::check_in_flags;
 use crate::utility::Observation;
 use crate::{Error, Result};
 
@@ -126,20 +126,15 @@ fn arcs(b: &Building, route: &[usize]) -> Vec<f64> {
     out
 }
 
+/// The route's check-in flags (see [`check_in_flags`]).
 fn checkins(b: &Building, route: &[usize], surveyor: &Surveyor) -> Vec<bool> {
-    let n = route.len();
-    let mut out = vec![false; n];
-    out[0] = true;
-    out[n - 1] = true;
-    if let Surveyor::Human {
-        turn_threshold_deg, ..
-    } = *surveyor
-    {
-        for i in 1..n.saturating_sub(1) {
-            out[i] = is_turn_checkin(b, route[i - 1], route[i], route[i + 1], turn_threshold_deg);
-        }
-    }
-    out
+    let threshold = match *surveyor {
+        Surveyor::Human {
+            turn_threshold_deg, ..
+        } => Some(turn_threshold_deg),
+        Surveyor::Robot { .. } => None,
+    };
+    check_in_flags(b, route, threshold)
 }
 
 impl Tracker {

@@ -4,6 +4,7 @@
 use super::{OffRoute, Tracker};
 use crate::building::Building;
 use crate::gp::Point;
+use crate::samples::point_on_edge;
 use crate::session::types::Surveyor;
 
 impl Tracker {
@@ -49,18 +50,7 @@ impl Tracker {
         let start = self.arc[idx - 1];
         let len = self.arc[idx] - start;
         let frac = ((a - start) / len).clamp(0.0, 1.0);
-        let floor = if pa.floor == pb.floor || frac < 0.5 {
-            pa.floor
-        } else if frac > 0.5 {
-            pb.floor
-        } else {
-            pa.floor.min(pb.floor)
-        };
-        Point::new(
-            pa.x + frac * (pb.x - pa.x),
-            pa.y + frac * (pb.y - pa.y),
-            floor,
-        )
+        point_on_edge(&pa, &pb, frac)
     }
 
     /// Counts `steps` more steps; returns whether they took the surveyor off-route (more

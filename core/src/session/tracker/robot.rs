@@ -71,14 +71,7 @@ impl Tracker {
                 if p.floor != pa.floor {
                     continue;
                 }
-                let (dx, dy) = (pb.x - pa.x, pb.y - pa.y);
-                let l2 = dx * dx + dy * dy;
-                let t = if l2 > 0.0 {
-                    (((p.x - pa.x) * dx + (p.y - pa.y) * dy) / l2).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                (t, (p.x - (pa.x + t * dx)).hypot(p.y - (pa.y + t * dy)))
+                p.segment_projection(&pa, &pb)
             } else if p.floor == pa.floor {
                 (0.0, p.planar_distance(&pa))
             } else if p.floor == pb.floor {
