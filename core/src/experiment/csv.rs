@@ -4,15 +4,7 @@ use std::fmt::Write as _;
 
 use super::Experiment;
 use crate::plan::Termination;
-
-/// A CSV field: quoted when it holds a comma, a quote or a line break.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
+use crate::store::csv_field;
 
 /// An optional number with `digits` decimals; empty when `None`.
 fn opt(v: Option<f64>, digits: usize) -> String {
@@ -129,17 +121,5 @@ impl Experiment {
             );
         }
         s
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn csv_fields_are_quoted_when_needed() {
-        assert_eq!(csv_field("a b"), "a b");
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
     }
 }

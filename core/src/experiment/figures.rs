@@ -3,24 +3,33 @@
 
 use super::chart::{LineChart, LinePoint, RefLine, ScatterChart, Series};
 use super::{Experiment, SummaryRow};
+use crate::plan::Algorithm;
 
 impl Experiment {
-    fn line_series(&self, f: impl Fn(&SummaryRow) -> LinePoint) -> Vec<Series<LinePoint>> {
+    /// One series per algorithm, in the configuration's order (the legend's): `points`
+    /// gives an algorithm's points.
+    fn per_algorithm<P>(&self, points: impl Fn(Algorithm) -> Vec<P>) -> Vec<Series<P>> {
         self.config
             .algorithms
             .iter()
             .enumerate()
-            .map(|(i, a)| Series {
+            .map(|(i, &a)| Series {
                 name: a.name().to_string(),
                 colour: i,
-                points: self
-                    .summary
-                    .iter()
-                    .filter(|r| r.algorithm == *a)
-                    .map(&f)
-                    .collect(),
+                points: points(a),
             })
             .collect()
+    }
+
+    /// One point per algorithm and budget, from the summary rows.
+    fn line_series(&self, f: impl Fn(&SummaryRow) -> LinePoint) -> Vec<Series<LinePoint>> {
+        self.per_algorithm(|a| {
+            self.summary
+                .iter()
+                .filter(|r| r.algorithm == a)
+                .map(&f)
+                .collect()
+        })
     }
 
     /// Mean utility against budget, bars from the smallest to the largest run.
@@ -114,22 +123,13 @@ impl Experiment {
             subtitle: format!("{}; r per budget: {}", self.building, per_budget.join(", ")),
             x_label: "utility f_D(P) (nats)".into(),
             y_label: "mean localization error (m)".into(),
-            series: self
-                .config
-                .algorithms
-                .iter()
-                .enumerate()
-                .map(|(i, a)| Series {
-                    name: a.name().to_string(),
-                    colour: i,
-                    points: self
-                        .runs
-                        .iter()
-                        .filter(|r| r.algorithm == *a)
-                        .map(|r| (r.utility_nats, r.mean_error_m))
-                        .collect(),
-                })
-                .collect(),
+            series: self.per_algorithm(|a| {
+                self.runs
+                    .iter()
+                    .filter(|r| r.algorithm == a)
+                    .map(|r| (r.utility_nats, r.mean_error_m))
+                    .collect()
+            }),
         }
         .to_svg()
     }

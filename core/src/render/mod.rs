@@ -36,7 +36,7 @@ mod style;
 use heat::Heat;
 use layout::{HEADING_PX, Layout, MARGIN_PX};
 use legend::Legend;
-use style::esc;
+pub(crate) use style::esc;
 
 /// One walk to draw, with its name in the legend.
 #[derive(Debug, Clone, Default)]
