@@ -232,10 +232,7 @@ fn corrupt_or_truncated_bundles_are_rejected_and_nothing_is_imported() {
     let x = Store::open_in_memory().expect("x");
     let before = counts(&x);
     let truncated = &good[..good.len() / 2];
-    let e = x
-        .import_bundle(truncated, "half.json")
-        .expect_err("truncated")
-        .to_string();
+    let e = refused(&x, truncated, "half.json");
     assert!(
         e.starts_with("half.json: $: not a complete bundle (truncated or not JSON)"),
         "{e}"
@@ -243,18 +240,12 @@ fn corrupt_or_truncated_bundles_are_rejected_and_nothing_is_imported() {
     // Flip one RSS value inside the body: still valid JSON, but the checksum fails.
     let corrupt = good.replacen("-51.0", "-15.0", 1);
     assert_ne!(corrupt, good);
-    let e = x
-        .import_bundle(&corrupt, "flip.json")
-        .expect_err("corrupt")
-        .to_string();
+    let e = refused(&x, &corrupt, "flip.json");
     assert!(
         e.contains("flip.json: sha256: checksum mismatch: the bundle is corrupt"),
         "{e}"
     );
-    let e = x
-        .import_bundle("{\"format\":\"trailprint-bundle/9\"}", "v9.json")
-        .expect_err("format")
-        .to_string();
+    let e = refused(&x, "{\"format\":\"trailprint-bundle/9\"}", "v9.json");
     assert!(
         e.contains("unknown bundle format \"trailprint-bundle/9\""),
         "{e}"
@@ -264,6 +255,14 @@ fn corrupt_or_truncated_bundles_are_rejected_and_nothing_is_imported() {
         x.list_buildings().expect("list").is_empty(),
         "no building may be created either"
     );
+}
+
+/// Imports `text` as `origin` into `x`, which must refuse it; the error message.
+fn refused(x: &Store, text: &str, origin: &str) -> String {
+    match x.import_bundle(text, origin) {
+        Ok(r) => panic!("{origin} must be refused, it imported: {r:?}"),
+        Err(e) => e.to_string(),
+    }
 }
 
 /// Device A's bundle (one session of 3 scans), a database that imported it, and that
@@ -289,10 +288,7 @@ fn conflicting_histories_are_refused_whole() {
         .expect("events");
     events.push(serde_json::json!({"seq": events.len() + 1, "at_ms": 1_000_000, "event": {"kind": "finish"}}));
     let forged = resign(&mut doc);
-    let e = x
-        .import_bundle(&forged, "forged")
-        .expect_err("conflict")
-        .to_string();
+    let e = refused(&x, &forged, "forged");
     assert!(e.contains("conflicting histories at event 2"), "{e}");
     assert_eq!((content(&x), counts(&x)), before);
 }
@@ -323,10 +319,7 @@ fn a_shared_event_that_differs_in_a_reading_is_a_conflict() {
     assert_eq!(ev["event"]["kind"], "scan");
     ev["event"]["rss"]["ap-01"] = (-99.0).into();
     let forged = resign(&mut doc);
-    let e = x
-        .import_bundle(&forged, "forged")
-        .expect_err("conflict")
-        .to_string();
+    let e = refused(&x, &forged, "forged");
     assert!(
         e.contains(&format!(
             "(session {uid}): conflicting histories at event 3"
@@ -354,10 +347,7 @@ fn a_shared_event_that_differs_in_a_reading_is_a_conflict() {
         }
     }
     let forged = resign(&mut doc);
-    let e = x
-        .import_bundle(&forged, "forged")
-        .expect_err("conflict")
-        .to_string();
+    let e = refused(&x, &forged, "forged");
     assert!(
         e.contains(&format!("conflicting histories at event {n}")) && e.contains("different plans"),
         "{e}"
@@ -391,10 +381,7 @@ fn events_after_finish_are_refused_in_bundles_and_in_the_store() {
     events.push(serde_json::json!({"seq": n + 1, "at_ms": 6_000, "event": {"kind": "step", "steps": 2, "distance_m": 1.4}}));
     let forged = resign(&mut doc);
     let x = Store::open_in_memory().expect("x");
-    let e = x
-        .import_bundle(&forged, "late.json")
-        .expect_err("after finish")
-        .to_string();
+    let e = refused(&x, &forged, "late.json");
     assert!(
         e.contains(&format!(
             "late.json: body.sessions[0].events[{n}]: session "
@@ -420,10 +407,7 @@ fn a_same_name_building_with_other_geometry_is_refused() {
     x.import_building(&other, Some("moved"), &ImportOptions::default())
         .expect("import");
     let before = (content(&x), counts(&x));
-    let e = x
-        .import_bundle(&good, "a.json")
-        .expect_err("other geometry")
-        .to_string();
+    let e = refused(&x, &good, "a.json");
     assert!(
         e.contains(&format!(
             "a.json: body.building: building {:?} (id 1) is already in the database with other geometry (vertex {moved:?} is at",
