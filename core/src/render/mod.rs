@@ -16,8 +16,8 @@
 //! `pilot`, `sample`, `walk`, `arrow`, `heat`, `step`, `start`, `end`, `stairs`, `track`,
 //! ...) for styling and tests. Each floor is drawn once, as a group in `<defs>`, and shown
 //! through `<use>` in each of its rows. The parts: [`layout`] (area, scale, rows, label
-//! placement), [`heat`], [`layers`] (the marks of one floor), [`panels`] (the floors' drawings and their
-//! panels), [`legend`], [`style`].
+//! placement), [`heat`], [`layers`] (the marks of one floor), [`panels`] (the floors'
+//! drawings and their panels), [`legend`], [`style`].
 
 use std::fmt::Write as _;
 
