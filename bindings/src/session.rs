@@ -90,17 +90,6 @@ impl From<core::SessionStatus> for SessionStatus {
     }
 }
 
-impl From<store::SessionStatus> for SessionStatus {
-    fn from(s: store::SessionStatus) -> Self {
-        match s {
-            store::SessionStatus::Active => SessionStatus::Active,
-            store::SessionStatus::Paused => SessionStatus::Paused,
-            store::SessionStatus::Finished => SessionStatus::Finished,
-            store::SessionStatus::Aborted => SessionStatus::Aborted,
-        }
-    }
-}
-
 /// A position estimate, metres on a floor.
 #[derive(Debug, Clone, Copy, uniffi::Record)]
 pub struct Position {

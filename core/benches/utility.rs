@@ -88,10 +88,7 @@ fn bench_building(c: &mut Criterion, name: &str, b: Arc<Building>, kernel: Kerne
     let engine = UtilityEngine::new(b.clone(), kernel, model).expect("engine");
     eprintln!("{name}: engine ISA {:?}", engine.isa());
     let mut obs = pilot_observations(&b.pilot_points());
-    obs.extend(samples.iter().map(|s| Observation {
-        pos: s.pos,
-        extra_noise: s.extra_noise,
-    }));
+    obs.extend(samples.iter().map(Observation::from));
     let vpts = b.vertex_points();
     let mut g = c.benchmark_group(name);
     g.sample_size(20);

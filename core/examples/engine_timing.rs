@@ -66,10 +66,7 @@ fn main() {
     let e = UtilityEngine::new(b.clone(), k, model).expect("engine");
     println!("ISA {:?}", e.isa());
     let mut obs = pilot_observations(&b.pilot_points());
-    obs.extend(samples.iter().map(|s| Observation {
-        pos: s.pos,
-        extra_noise: s.extra_noise,
-    }));
+    obs.extend(samples.iter().map(Observation::from));
     let vp = b.vertex_points();
     if std::env::var("PROFILE_BATCH").is_ok() {
         for _ in 0..3000 {

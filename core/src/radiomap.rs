@@ -38,7 +38,7 @@ use crate::eval::{MISSING_DBM, reference_grid};
 use crate::floorplan::LocalFrame;
 use crate::gp::predict::GpModel;
 use crate::gp::{Kernel, Point};
-use crate::store::StoredCollected;
+use crate::store::{StoredCollected, csv_field};
 use crate::{Error, Result};
 
 /// The UJIIndoorLoc value of an access point that was not heard.
@@ -140,15 +140,6 @@ pub fn scan_rows(
         });
     }
     out
-}
-
-/// Quotes a CSV field if it holds a comma, a quote or a line break.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
 }
 
 fn opt<T: std::fmt::Debug>(v: Option<T>) -> String {

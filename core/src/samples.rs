@@ -139,6 +139,25 @@ pub struct Sample {
     pub extra_noise: f64,
 }
 
+/// The point a fraction `frac` (0 to 1) of the way along the edge from `pa` to `pb`. On
+/// a stair (ends on different floors) the floor is the nearer end's, the lower one exactly
+/// at the middle. The sampler, the session tracker and the simulated surveyor all place
+/// points with this one function, so a session's labels agree with the planned samples.
+pub fn point_on_edge(pa: &Point, pb: &Point, frac: f64) -> Point {
+    let floor = if pa.floor == pb.floor || frac < 0.5 {
+        pa.floor
+    } else if frac > 0.5 {
+        pb.floor
+    } else {
+        pa.floor.min(pb.floor)
+    };
+    Point::new(
+        pa.x + frac * (pb.x - pa.x),
+        pa.y + frac * (pb.y - pa.y),
+        floor,
+    )
+}
+
 /// Turn angle at `b` between the directions `a -> b` and `b -> c`, degrees in [0, 180].
 pub fn turn_angle_deg(a: &Point, b: &Point, c: &Point) -> f64 {
     let (x1, y1) = (b.x - a.x, b.y - a.y);
@@ -152,6 +171,30 @@ pub fn turn_angle_deg(a: &Point, b: &Point, c: &Point) -> f64 {
         .clamp(-1.0, 1.0)
         .acos()
         .to_degrees()
+}
+
+/// Where the surveyor checks in along `walk` (SPEC section 4): the start, the end and, for
+/// a human (`turn_threshold_deg` given), every vertex where [`is_turn_checkin`] holds. A
+/// robot (`None`) needs no check-in between the ends. Shared by the session tracker and the
+/// printed walk, so that the sheet asks for the check-ins the session expects.
+pub fn check_in_flags(
+    building: &Building,
+    walk: &[usize],
+    turn_threshold_deg: Option<f64>,
+) -> Vec<bool> {
+    let n = walk.len();
+    let mut out = vec![false; n];
+    if n == 0 {
+        return out;
+    }
+    out[0] = true;
+    out[n - 1] = true;
+    if let Some(threshold) = turn_threshold_deg {
+        for i in 1..n - 1 {
+            out[i] = is_turn_checkin(building, walk[i - 1], walk[i], walk[i + 1], threshold);
+        }
+    }
+    out
 }
 
 /// Whether the surveyor checks in at `walk[i]` (`0 < i < len - 1`): the walk turns by
@@ -306,19 +349,7 @@ impl WalkSampler {
                 break;
             }
             let frac = ((s - start_arc) / len).clamp(0.0, 1.0);
-            // On a stair the floor of the nearer end, the lower one exactly at the middle.
-            let floor = if pa.floor == pb.floor || frac < 0.5 {
-                pa.floor
-            } else if frac > 0.5 {
-                pb.floor
-            } else {
-                pa.floor.min(pb.floor)
-            };
-            let pos = Point::new(
-                pa.x + frac * (pb.x - pa.x),
-                pa.y + frac * (pb.y - pa.y),
-                floor,
-            );
+            let pos = point_on_edge(&pa, &pb, frac);
             self.next_k += 1;
             if s >= end_arc - ARC_EPS {
                 // At the new end vertex: its check-in status is not known yet.
@@ -375,6 +406,19 @@ mod tests {
           "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":2,"y":0},{"id":"c","x":2,"y":1.5},{"id":"d","x":4,"y":0}],
           "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"},{"a":"b","b":"d"}]}"#;
         Building::from_json(text, "line").expect("valid")
+    }
+
+    #[test]
+    fn a_point_on_a_stair_takes_the_nearer_floor_and_the_lower_one_at_the_middle() {
+        let (low, high) = (Point::new(0.0, 0.0, 2), Point::new(4.0, 2.0, 1));
+        let at = |f: f64| point_on_edge(&low, &high, f);
+        assert_eq!(at(0.25), Point::new(1.0, 0.5, 2));
+        assert_eq!(at(0.75), Point::new(3.0, 1.5, 1));
+        // Exactly at the middle of a stair: the lower floor, from either end.
+        assert_eq!(at(0.5).floor, 1);
+        assert_eq!(point_on_edge(&high, &low, 0.5).floor, 1);
+        assert_eq!(at(0.0), low);
+        assert_eq!(at(1.0), high);
     }
 
     #[test]

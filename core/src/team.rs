@@ -106,11 +106,8 @@ pub struct TeamPlan {
 
 fn observations(b: &Building, req: &PlanRequest, walk: &[usize]) -> Result<Vec<Observation>> {
     Ok(sample_walk(b, walk, &req.model, &req.kernel)?
-        .into_iter()
-        .map(|s| Observation {
-            pos: s.pos,
-            extra_noise: s.extra_noise,
-        })
+        .iter()
+        .map(Observation::from)
         .collect())
 }
 

@@ -38,13 +38,7 @@ fn a_closed_stdout_ends_the_command_quietly() {
     let got = stdout.read(&mut first).expect("read");
     assert!(got > 0, "the tool printed nothing");
     drop(stdout);
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .expect("stderr")
-        .read_to_string(&mut stderr)
-        .expect("stderr");
+    let stderr = crate::store_common::read_stderr(&mut child);
     let status = child.wait().expect("wait");
     assert!(!stderr.contains("panicked"), "panicked: {stderr}");
     assert_eq!(

@@ -9,37 +9,14 @@ use crate::store_common;
 
 use std::path::Path;
 
-use store_common::{dump_file, run, run_ok, shared_instance};
+use store_common::{
+    SIMULATE_DEMO_ROBOT, demo_name, dump_file, read_stderr, run, run_ok, shared_instance,
+};
 
 /// A simulated survey of the demo building, stored in `db`: one plan, one session and its
 /// collected fingerprints.
 fn simulate(db: &Path) {
-    run_ok(
-        db,
-        &[
-            "simulate",
-            "--building",
-            concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json"),
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-r5-door",
-            "--budget",
-            "30",
-            "--time-limit",
-            "0.2",
-            "--surveyor",
-            "robot",
-            "--seed",
-            "3",
-        ],
-    );
-}
-
-fn demo_name() -> String {
-    trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
-        .expect("demo")
-        .name
+    run_ok(db, &[&SIMULATE_DEMO_ROBOT[..], &["--seed", "3"]].concat());
 }
 
 #[test]
@@ -172,13 +149,7 @@ fn output_into_a_fifo_is_written_into_not_replaced() {
         }
         std::thread::sleep(std::time::Duration::from_millis(5));
     };
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .expect("stderr")
-        .read_to_string(&mut stderr)
-        .expect("stderr");
+    let stderr = read_stderr(&mut child);
     assert!(status.success(), "{stderr}");
     let text = String::from_utf8(text).expect("utf-8");
     let v: serde_json::Value = serde_json::from_str(&text).expect("the export came through");

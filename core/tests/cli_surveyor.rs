@@ -10,15 +10,9 @@ use crate::store_common;
 
 use std::path::Path;
 
-use store_common::{run, run_ok, shared_instance};
+use store_common::{demo_name, run, run_ok, shared_instance, shell_words};
 
-const DEMO: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json");
-
-fn demo_name() -> String {
-    trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
-        .expect("demo")
-        .name
-}
+const DEMO: &str = store_common::DEMO_BUILDING;
 
 fn stderr(out: &std::process::Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
@@ -33,6 +27,11 @@ fn run_err(db: &Path, args: &[&str]) -> String {
     e
 }
 
+/// The demo's corridor walk, from `f0-c00` to `f0-c15` within `budget` metres.
+fn corridor(budget: &str) -> [&str; 6] {
+    ["--start", "f0-c00", "--end", "f0-c15", "--budget", budget]
+}
+
 /// A database holding the demo building and one plan of it (a human's walk).
 fn with_plan(db: &Path) -> (String, i64) {
     run_ok(db, &["import", DEMO]);
@@ -40,21 +39,11 @@ fn with_plan(db: &Path) -> (String, i64) {
     let out = run_ok(
         db,
         &[
-            "plan",
-            "--building",
-            &name,
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-c15",
-            "--budget",
-            "60",
-            "--model",
-            "human",
-            "--time-limit",
-            "0.3",
-            "--json",
-        ],
+            &["plan", "--building", &name][..],
+            &corridor("60"),
+            &["--model", "human", "--time-limit", "0.3", "--json"],
+        ]
+        .concat(),
     );
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
     (name, v["plan_id"].as_i64().expect("plan_id"))
@@ -279,52 +268,16 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
     assert!(status.status.success(), "{}", stderr(&status));
 }
 
-/// Splits a printed command line into arguments (double quotes group, as a shell does).
-fn shell_words(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut any = false;
-    for c in line.chars() {
-        match c {
-            '"' => {
-                quoted = !quoted;
-                any = true;
-            }
-            ' ' if !quoted => {
-                if any || !cur.is_empty() {
-                    out.push(std::mem::take(&mut cur));
-                }
-                any = false;
-            }
-            _ => cur.push(c),
-        }
-    }
-    if any || !cur.is_empty() {
-        out.push(cur);
-    }
-    out
-}
-
 #[test]
 fn plan_is_printed_for_a_person() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = dir.path().join("t.db");
     let args = [
-        "plan",
-        "--building",
-        DEMO,
-        "--start",
-        "f0-c00",
-        "--end",
-        "f0-c15",
-        "--budget",
-        "70",
-        "--model",
-        "human",
-        "--time-limit",
-        "0.3",
-    ];
+        &["plan", "--building", DEMO][..],
+        &corridor("70"),
+        &["--model", "human", "--time-limit", "0.3"],
+    ]
+    .concat();
     let out = run_ok(&db, &args);
     let walk: Vec<&str> = out
         .lines()
@@ -524,23 +477,19 @@ fn render_draws_plans_sessions_and_teams() {
     let out = run_ok(
         &db,
         &[
-            "simulate",
-            "--building",
-            &name,
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-c15",
-            "--budget",
-            "40",
-            "--surveyor",
-            "human",
-            "--deviate",
-            "0.2",
-            "--time-limit",
-            "0.3",
-            "--json",
-        ],
+            &["simulate", "--building", &name][..],
+            &corridor("40"),
+            &[
+                "--surveyor",
+                "human",
+                "--deviate",
+                "0.2",
+                "--time-limit",
+                "0.3",
+                "--json",
+            ],
+        ]
+        .concat(),
     );
     let sim: serde_json::Value =
         serde_json::from_str(out.lines().last().expect("json")).expect("json");

@@ -1,14 +1,9 @@
 //! End-to-end: `trailprint generate`, `evaluate` and `render` as a user runs them.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn trailprint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_trailprint"))
-        .args(args)
-        .output()
-        .expect("run trailprint")
-}
+use crate::store_common::trailprint;
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -43,7 +38,7 @@ fn generate_evaluate_render() {
     assert_eq!(b.floors.len(), 2);
 
     let walk = "f0-c02,f0-c01,f0-c00,f1-c00,f1-c01";
-    let o = trailprint(&[
+    let evaluate = [
         "evaluate",
         "--building",
         file_s,
@@ -54,7 +49,8 @@ fn generate_evaluate_render() {
         "--seed",
         "2",
         "--json",
-    ]);
+    ];
+    let o = trailprint(&evaluate);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("one JSON object");
     for key in ["mean_error_m", "median_error_m", "p90_error_m"] {
@@ -62,18 +58,7 @@ fn generate_evaluate_render() {
     }
     assert_eq!(v["samples"], 1 + (4.0 + 8.0 + 2.0) as u64 * 2);
     // Same seed, same answer.
-    let again = trailprint(&[
-        "evaluate",
-        "--building",
-        file_s,
-        "--walk",
-        walk,
-        "--kernel",
-        "60,8,4",
-        "--seed",
-        "2",
-        "--json",
-    ]);
+    let again = trailprint(&evaluate);
     let w: serde_json::Value = serde_json::from_str(stdout(&again).trim()).expect("json");
     assert_eq!(v["mean_error_m"], w["mean_error_m"]);
 

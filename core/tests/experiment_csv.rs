@@ -2,8 +2,8 @@
 //! on Area One. The CSV files have the documented columns, the correlation is a number in
 //! [-1, 1], and the same seed gives the same files (run times aside).
 
+use crate::store_common::trailprint;
 use std::path::Path;
-use std::process::{Command, Output};
 use std::sync::Arc;
 
 use trailprint::Building;
@@ -188,41 +188,44 @@ fn unreachable_budget_and_missing_world_model_are_errors() {
     assert!(e.to_string().contains("dense_survey"), "{e}");
 }
 
-fn trailprint(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_trailprint"))
-        .args(args)
-        .output()
-        .expect("run trailprint")
-}
+/// `trailprint experiment` on Area One, from r0c0 back to r0c0.
+const EXPERIMENT_R0C0: [&str; 7] = [
+    "experiment",
+    "--building",
+    AREA_ONE,
+    "--start",
+    "r0c0",
+    "--end",
+    "r0c0",
+];
 
 #[test]
 fn cli_writes_every_file_and_repeats_itself() {
     let dir = tempfile::tempdir().expect("tempdir");
     let run = |out: &Path| {
-        let o = trailprint(&[
-            "experiment",
-            "--building",
-            AREA_ONE,
-            "--start",
-            "r0c0",
-            "--end",
-            "r0c0",
-            "--budgets",
-            "12,18",
-            "--algorithms",
-            "greedy,genetic",
-            "--runs",
-            "2",
-            "--population",
-            "30",
-            "--seed",
-            "5",
-            "--time-limit",
-            "30,genetic=20",
-            "--out",
-            out.to_str().expect("utf-8 path"),
-            "--quiet",
-        ]);
+        let o = trailprint(
+            &[
+                &EXPERIMENT_R0C0[..],
+                &[
+                    "--budgets",
+                    "12,18",
+                    "--algorithms",
+                    "greedy,genetic",
+                    "--runs",
+                    "2",
+                    "--population",
+                    "30",
+                    "--seed",
+                    "5",
+                    "--time-limit",
+                    "30,genetic=20",
+                    "--out",
+                    out.to_str().expect("utf-8 path"),
+                    "--quiet",
+                ],
+            ]
+            .concat(),
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
@@ -256,21 +259,14 @@ fn cli_writes_every_file_and_repeats_itself() {
     assert_eq!(json["config"]["time_limits"]["genetic"], 20.0);
     assert_eq!(json["runs"].as_array().map(Vec::len), Some(8));
 
-    let o = trailprint(&[
-        "experiment",
-        "--building",
-        AREA_ONE,
-        "--start",
-        "r0c0",
-        "--end",
-        "r0c0",
-        "--budgets",
-        "12",
-        "--algorithms",
-        "greedy,bogus",
-        "--out",
-        d1.to_str().expect("utf-8 path"),
-    ]);
+    let o = trailprint(
+        &[
+            &EXPERIMENT_R0C0[..],
+            &["--budgets", "12", "--algorithms", "greedy,bogus", "--out"],
+            &[d1.to_str().expect("utf-8 path")],
+        ]
+        .concat(),
+    );
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown algorithm"));
 }

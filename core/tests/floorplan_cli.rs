@@ -4,12 +4,11 @@
 #![allow(clippy::expect_used, clippy::unwrap_used)]
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use trailprint::Store;
 use trailprint::radiomap::{ScanRow, read_jsonl, read_uji_csv};
 
-const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
+use crate::store_common::run;
 
 fn fixture(name: &str) -> String {
     format!(
@@ -18,13 +17,15 @@ fn fixture(name: &str) -> String {
     )
 }
 
-fn run(db: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("--db")
-        .arg(db)
-        .args(args)
-        .output()
-        .expect("run trailprint")
+/// Exports the radio map of `Office` (2 m grid) to the CSV `path`; its rows, header left out.
+fn radio_map_rows(db: &Path, path: &Path) -> Vec<String> {
+    let p = path.to_str().unwrap();
+    ok(
+        db,
+        &["export", "Office", "--radio-map", "--grid", "2", "-o", p],
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines().skip(1).map(str::to_string).collect()
 }
 
 fn ok(db: &Path, args: &[&str]) -> String {
@@ -167,21 +168,7 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
     );
 
     // The radio map of the pilot data: every access point on a grid over the walkable outlines.
-    let map_csv = dir.path().join("map.csv");
-    ok(
-        db,
-        &[
-            "export",
-            "Office",
-            "--radio-map",
-            "--grid",
-            "2",
-            "-o",
-            map_csv.to_str().unwrap(),
-        ],
-    );
-    let text = std::fs::read_to_string(&map_csv).unwrap();
-    let rows: Vec<&str> = text.lines().skip(1).collect();
+    let rows = radio_map_rows(db, &dir.path().join("map.csv"));
     assert!(
         !rows.is_empty() && rows.len().is_multiple_of(3),
         "{} rows",
@@ -360,23 +347,12 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
     }
 
     // After the session, the radio map holds its access points too.
-    let map_csv = dir.path().join("map2.csv");
-    ok(
-        db,
-        &[
-            "export",
-            "Office",
-            "--radio-map",
-            "--grid",
-            "2",
-            "-o",
-            map_csv.to_str().unwrap(),
-        ],
-    );
     let n_aps = waps.lines().count() - 1;
     assert!(n_aps > 3);
-    let rows = std::fs::read_to_string(&map_csv).unwrap().lines().count() - 1;
-    assert_eq!(rows % n_aps, 0);
+    assert_eq!(
+        radio_map_rows(db, &dir.path().join("map2.csv")).len() % n_aps,
+        0
+    );
 }
 
 #[test]

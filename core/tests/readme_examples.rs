@@ -10,7 +10,7 @@
 use std::path::Path;
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
+use crate::store_common::{BIN, shell_words};
 
 /// The `trailprint ...` lines of the ```` ```sh ```` blocks of `text`, in order.
 fn examples(text: &str) -> Vec<String> {
@@ -25,34 +25,6 @@ fn examples(text: &str) -> Vec<String> {
         if in_sh && let Some(cmd) = t.strip_prefix("trailprint ") {
             out.push(cmd.to_string());
         }
-    }
-    out
-}
-
-/// Splits a command line into arguments as a shell does for plain words and double
-/// quotes (all the README uses).
-fn shell_words(line: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let (mut quoted, mut any) = (false, false);
-    for c in line.chars() {
-        match c {
-            '"' => {
-                quoted = !quoted;
-                any = true;
-            }
-            ' ' if !quoted => {
-                if any || !cur.is_empty() {
-                    out.push(std::mem::take(&mut cur));
-                }
-                any = false;
-            }
-            _ => cur.push(c),
-        }
-    }
-    assert!(!quoted, "unbalanced quotes in {line:?}");
-    if any || !cur.is_empty() {
-        out.push(cur);
     }
     out
 }

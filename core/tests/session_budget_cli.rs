@@ -4,27 +4,11 @@
 //! judges what a session really collected.
 
 use std::path::Path;
-use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
+use crate::store_common::run_ok as run;
 
 fn fixture(name: &str) -> String {
     format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn run(db: &Path, args: &[&str]) -> String {
-    let out = Command::new(BIN)
-        .arg("--db")
-        .arg(db)
-        .args(args)
-        .output()
-        .expect("run trailprint");
-    assert!(
-        out.status.success(),
-        "trailprint {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
 }
 
 fn last_json(text: &str) -> serde_json::Value {
@@ -221,24 +205,16 @@ fn sessions_lists_and_evaluate_judges_what_was_collected() {
     );
 
     // Unknown sessions and bad localizers are refused with a message.
-    let out = Command::new(BIN)
-        .arg("--db")
-        .arg(&db)
-        .args(["evaluate", "--session", "99"])
-        .output()
-        .expect("run");
+    let out = crate::store_common::run(&db, &["evaluate", "--session", "99"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("session 99"));
-    let out = Command::new(BIN)
-        .args([
-            "evaluate",
-            "--building",
-            &fixture("area-one.json"),
-            "--localizer",
-            "knn:0",
-        ])
-        .output()
-        .expect("run");
+    let out = crate::store_common::trailprint(&[
+        "evaluate",
+        "--building",
+        &fixture("area-one.json"),
+        "--localizer",
+        "knn:0",
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("knn:K"));
 }

@@ -3,33 +3,19 @@
 
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
-
-fn demo_path() -> String {
-    format!("{}/data/demo-building.json", env!("CARGO_MANIFEST_DIR"))
-}
+use crate::store_common::{BIN, DEMO_BUILDING, demo_route};
 
 fn simulate(db: Option<&std::path::Path>, extra: &[&str]) -> std::process::Output {
     let mut c = Command::new(BIN);
     if let Some(db) = db {
         c.arg("--db").arg(db);
     }
-    c.args([
-        "simulate",
-        "--building",
-        &demo_path(),
-        "--start",
-        "f0-c00",
-        "--end",
-        "f0-r5-door",
-        "--budget",
-        "50",
-        "--time-limit",
-        "0.3",
-    ])
-    .args(extra)
-    .output()
-    .expect("run trailprint simulate")
+    c.args(["simulate", "--building", DEMO_BUILDING])
+        .args(demo_route("50"))
+        .args(["--time-limit", "0.3"])
+        .args(extra)
+        .output()
+        .expect("run trailprint simulate")
 }
 
 #[test]

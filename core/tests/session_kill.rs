@@ -17,11 +17,7 @@ use trailprint::session::{
 };
 use trailprint::store::Store;
 
-const BIN: &str = env!("CARGO_BIN_EXE_trailprint");
-
-fn demo_path() -> String {
-    format!("{}/data/demo-building.json", env!("CARGO_MANIFEST_DIR"))
-}
+use crate::store_common::{BIN, DEMO_BUILDING, demo_route};
 
 struct Child {
     session: i64,
@@ -34,16 +30,9 @@ fn run_child(db: &Path, surveyor: &str, seed: u64, kill_after: usize) -> Child {
     let mut child = Command::new(BIN)
         .arg("--db")
         .arg(db)
+        .args(["simulate", "--building", DEMO_BUILDING])
+        .args(demo_route("60"))
         .args([
-            "simulate",
-            "--building",
-            &demo_path(),
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-r5-door",
-            "--budget",
-            "60",
             "--surveyor",
             surveyor,
             "--deviate",

@@ -9,7 +9,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use store_common::{BIN, dump_file, fixtures, run, run_ok, shared_instance};
+use store_common::{BIN, SIMULATE_DEMO_ROBOT, dump_file, fixtures, run, run_ok, shared_instance};
 
 /// A database holding Area One, in a fresh temp dir.
 fn seeded_db() -> (tempfile::TempDir, PathBuf) {
@@ -314,24 +314,7 @@ fn usage_errors_exit_with_2_and_missing_buildings_with_1() {
 /// The simulate command the issue found writing into damaged databases: it plans (a plan
 /// row), then records a session.
 fn simulate_args() -> Vec<String> {
-    [
-        "simulate",
-        "--building",
-        concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json"),
-        "--start",
-        "f0-c00",
-        "--end",
-        "f0-r5-door",
-        "--budget",
-        "30",
-        "--time-limit",
-        "0.2",
-        "--surveyor",
-        "robot",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect()
+    SIMULATE_DEMO_ROBOT.iter().map(|s| s.to_string()).collect()
 }
 
 /// Runs every store command of `commands` on `db`; each must fail with one error line

@@ -216,22 +216,15 @@ fn the_command_line_plans_a_stored_building_with_the_stored_fit() {
             .expect("fit");
         id
     };
+    let id = id.to_string();
     let out = store_common::run_ok(
         &db,
         &[
-            "plan",
-            "--building",
-            &id.to_string(),
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-r5-door",
-            "--budget",
-            "30",
-            "--algorithm",
-            "greedy",
-            "--json",
-        ],
+            &["plan", "--building", &id][..],
+            &store_common::demo_route("30"),
+            &["--algorithm", "greedy", "--json"],
+        ]
+        .concat(),
     );
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
     assert_eq!(v["kernel"]["sf2"], 55.0, "{v}");

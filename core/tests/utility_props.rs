@@ -20,10 +20,7 @@ fn instance(name: &str) -> Arc<Building> {
 fn reference(b: &Building, k: &Kernel, model: &SurveyorModel, walk: &[usize]) -> f64 {
     let mut obs = pilot_observations(&b.pilot_points());
     for s in sample_walk(b, walk, model, k).expect("samples") {
-        obs.push(Observation {
-            pos: s.pos,
-            extra_noise: s.extra_noise,
-        });
+        obs.push(Observation::from(&s));
     }
     reference_utility(k, &b.vertex_points(), &obs).expect("reference")
 }
@@ -206,10 +203,7 @@ fn observations_api_agrees_with_walks() {
     let obs: Vec<Observation> = sample_walk(&b, &walk, &SurveyorModel::human(), &k)
         .expect("s")
         .iter()
-        .map(|s| Observation {
-            pos: s.pos,
-            extra_noise: s.extra_noise,
-        })
+        .map(Observation::from)
         .collect();
     let a = e.utility_of_observations(&obs).expect("u");
     assert!(rel(a, e.utility(&walk).expect("u")) < 1e-12);

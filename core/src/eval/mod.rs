@@ -252,14 +252,7 @@ fn fingerprint_matrix(fps: &[Fingerprint], aps: &[String]) -> (Vec<Point>, DMatr
 
 /// Distance from `p` to the segment `a b` (plan view).
 fn segment_distance(p: &Point, a: &Point, b: &Point) -> f64 {
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((p.x - a.x) * dx + (p.y - a.y) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p.x - (a.x + t * dx)).hypot(p.y - (a.y + t * dy))
+    p.segment_projection(a, b).1
 }
 
 /// The reference grid of SPEC section 5: for every floor, points `step` apart over the

@@ -8,6 +8,8 @@
 
 use std::fmt::Write as _;
 
+use crate::render::esc;
+
 const WIDTH: f64 = 720.0;
 const HEIGHT: f64 = 440.0;
 const LEFT: f64 = 70.0;
@@ -128,21 +130,6 @@ pub struct ScatterChart {
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<Series<(f64, f64)>>,
-}
-
-/// Escapes text for XML content and attribute values.
-fn esc(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            _ => out.push(c),
-        }
-    }
-    out
 }
 
 /// "Nice" tick values covering `[lo, hi]` (about `n` of them): steps of 1, 2 or 5 times a
@@ -304,6 +291,11 @@ fn frame_svg(s: &mut String, f: &Frame, labels: &Labels, xt: &[f64], yt: &[f64])
     );
 }
 
+/// The legend entries of a chart's series: name and colour index, in order.
+fn legend_entries<P>(series: &[Series<P>]) -> Vec<(String, usize)> {
+    series.iter().map(|s| (s.name.clone(), s.colour)).collect()
+}
+
 /// The legend on the right: one entry per series name.
 fn legend_svg(s: &mut String, entries: &[(String, usize)], marker_line: bool) {
     let x = WIDTH - RIGHT + 18.0;
@@ -427,12 +419,7 @@ impl LineChart {
             }
             let _ = writeln!(s, "</g>");
         }
-        let entries: Vec<(String, usize)> = self
-            .series
-            .iter()
-            .map(|s| (s.name.clone(), s.colour))
-            .collect();
-        legend_svg(&mut s, &entries, true);
+        legend_svg(&mut s, &legend_entries(&self.series), true);
         s.push_str("</svg>\n");
         s
     }
@@ -487,12 +474,7 @@ impl ScatterChart {
             }
             let _ = writeln!(s, "</g>");
         }
-        let entries: Vec<(String, usize)> = self
-            .series
-            .iter()
-            .map(|s| (s.name.clone(), s.colour))
-            .collect();
-        legend_svg(&mut s, &entries, false);
+        legend_svg(&mut s, &legend_entries(&self.series), false);
         s.push_str("</svg>\n");
         s
     }

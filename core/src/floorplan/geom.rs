@@ -57,15 +57,18 @@ pub(crate) fn nearest_boundary_point(poly: &Polygon<f64>, c: Coord<f64>) -> Coor
 /// walls of a rectilinear building whatever its bearing.
 pub(crate) fn dominant_angle(poly: &Polygon<f64>) -> f64 {
     let quarter = std::f64::consts::FRAC_PI_2;
+    // Each boundary edge of positive length: its angle modulo 90 degrees, its 1-degree
+    // bin and its length.
+    let edges = || {
+        poly.exterior().lines().filter_map(move |line| {
+            let d = line.delta();
+            let len = d.x.hypot(d.y);
+            let a = d.y.atan2(d.x).rem_euclid(quarter);
+            (len > 0.0).then(|| (a, ((a / quarter * 90.0).round() as usize) % 90, len))
+        })
+    };
     let mut bins = [0.0f64; 90];
-    for line in poly.exterior().lines() {
-        let d = line.delta();
-        let len = d.x.hypot(d.y);
-        if len <= 0.0 {
-            continue;
-        }
-        let a = d.y.atan2(d.x).rem_euclid(quarter);
-        let bin = ((a / quarter * 90.0).round() as usize) % 90;
+    for (_, bin, len) in edges() {
         bins[bin] += len;
     }
     let (best, _) = bins.iter().enumerate().fold(
@@ -74,14 +77,7 @@ pub(crate) fn dominant_angle(poly: &Polygon<f64>) -> f64 {
     );
     // Refine: the length-weighted mean angle of the edges in the winning bin.
     let (mut sum, mut weight) = (0.0, 0.0);
-    for line in poly.exterior().lines() {
-        let d = line.delta();
-        let len = d.x.hypot(d.y);
-        if len <= 0.0 {
-            continue;
-        }
-        let a = d.y.atan2(d.x).rem_euclid(quarter);
-        let bin = ((a / quarter * 90.0).round() as usize) % 90;
+    for (a, bin, len) in edges() {
         if bin == best {
             // Unwrap angles near 90 degrees onto 0 so that the mean does not split them.
             let a = if best == 0 && a > quarter / 2.0 {

@@ -30,7 +30,7 @@ use super::geom::{
 };
 use super::{
     ConnectorKind, DroppedPart, ELEVATOR_BASE_M, ELEVATOR_M_PER_LEVEL, FloorplanImport, Format,
-    ImportStats, Plan, STAIRS_M_PER_LEVEL, SpaceKind,
+    ImportStats, Plan, STAIRS_M_PER_LEVEL, SpaceKind, Wall,
 };
 use crate::building::{
     Building, BuildingFile, EdgeSpec, FORMAT, FloorSpec, Outline, OutlineKind, VertexSpec,
@@ -143,7 +143,19 @@ struct FloorCtx<'a> {
     walls: Vec<&'a geo::LineString<f64>>,
 }
 
-impl FloorCtx<'_> {
+impl<'a> FloorCtx<'a> {
+    /// Floor `floor` with the walls of that floor.
+    fn new(floor: i64, walls: &'a [Wall]) -> Self {
+        FloorCtx {
+            floor,
+            walls: walls
+                .iter()
+                .filter(|w| w.floor == floor)
+                .map(|w| &w.line)
+                .collect(),
+        }
+    }
+
     /// Whether the segment crosses no wall except within [`JOIN_TOL_M`] of a portal.
     fn walls_ok(&self, net: &Net, a: Coord<f64>, b: Coord<f64>) -> bool {
         if self.walls.is_empty() {
@@ -269,14 +281,7 @@ pub(crate) fn build(
     for floor in &floors {
         let f = floor.id;
         let ft = floor_tag(f);
-        let ctx = FloorCtx {
-            floor: f,
-            walls: walls
-                .iter()
-                .filter(|w| w.floor == f)
-                .map(|w| &w.line)
-                .collect(),
-        };
+        let ctx = FloorCtx::new(f, &walls);
         // Doors given for this floor count as portals from the start (grid edges may pass
         // a wall there).
         for d in &doors {
@@ -491,14 +496,7 @@ pub(crate) fn build(
         let mut stops: Vec<(usize, i64, usize)> = Vec::new(); // (rank, floor, vertex)
         for &(f, p) in &c.stops {
             let Some(&r) = rank.get(&f) else { continue };
-            let ctx = FloorCtx {
-                floor: f,
-                walls: walls
-                    .iter()
-                    .filter(|w| w.floor == f)
-                    .map(|w| &w.line)
-                    .collect(),
-            };
+            let ctx = FloorCtx::new(f, &walls);
             // The smallest space on that floor that holds the stop (the shaft itself).
             let holding = (0..spaces.len())
                 .filter(|&si| spaces[si].floor == f && covers(&spaces[si].polygon, p, JOIN_TOL_M))
@@ -713,6 +711,17 @@ pub(crate) fn build(
             .collect();
         (distinct.len() >= 3).then_some(pts)
     };
+    // A wall (a hole of a space, or a wall line) is drawn when it has two points.
+    let push_wall = |out: &mut Vec<Outline>, floor: i64, points: Vec<[f64; 2]>| {
+        if points.len() >= 2 {
+            out.push(Outline {
+                floor,
+                kind: OutlineKind::Wall,
+                name: None,
+                points,
+            });
+        }
+    };
     for (f, poly) in &building_outlines {
         if !kept_floors.contains(f) {
             continue;
@@ -744,30 +753,11 @@ pub(crate) fn build(
             });
         }
         for hole in sp.polygon.interiors() {
-            let points = ring(hole);
-            if points.len() >= 2 {
-                outlines.push(Outline {
-                    floor: sp.floor,
-                    kind: OutlineKind::Wall,
-                    name: None,
-                    points,
-                });
-            }
+            push_wall(&mut outlines, sp.floor, ring(hole));
         }
     }
-    for w in &walls {
-        if !kept_floors.contains(&w.floor) {
-            continue;
-        }
-        let points = ring(&w.line);
-        if points.len() >= 2 {
-            outlines.push(Outline {
-                floor: w.floor,
-                kind: OutlineKind::Wall,
-                name: None,
-                points,
-            });
-        }
+    for w in walls.iter().filter(|w| kept_floors.contains(&w.floor)) {
+        push_wall(&mut outlines, w.floor, ring(&w.line));
     }
 
     let file = BuildingFile {

@@ -19,6 +19,20 @@ impl Point {
     pub fn planar_distance(&self, other: &Point) -> f64 {
         (self.x - other.x).hypot(self.y - other.y)
     }
+
+    /// The point of the segment `a b` nearest to this one, in the plane (floors ignored):
+    /// its fraction `t` of the way from `a` (in `[0, 1]`; 0 for a zero-length segment) and
+    /// the distance to it.
+    pub fn segment_projection(&self, a: &Point, b: &Point) -> (f64, f64) {
+        let (dx, dy) = (b.x - a.x, b.y - a.y);
+        let l2 = dx * dx + dy * dy;
+        let t = if l2 > 0.0 {
+            (((self.x - a.x) * dx + (self.y - a.y) * dy) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (t, (self.x - (a.x + t * dx)).hypot(self.y - (a.y + t * dy)))
+    }
 }
 
 /// Hyperparameters `(sf2, ell, sn2)` of `k(p, q) = sf2 * exp(-|p - q| / ell)` with

@@ -18,6 +18,15 @@ const LANE_PX: f64 = 4.5;
 /// Walks longer than this get a step number at every k-th vertex only.
 const MAX_NUMBERED: usize = 80;
 
+/// An outline's points in the drawing's pixels, as an SVG `points` attribute.
+fn svg_points(points: &[[f64; 2]], lay: &Layout) -> String {
+    let pts: Vec<String> = points
+        .iter()
+        .map(|p| format!("{:.1},{:.1}", lay.px(p[0]), lay.py(p[1])))
+        .collect();
+    pts.join(" ")
+}
+
 /// The floor-plan outlines: building footprints, then walkable spaces (filled by kind),
 /// then walls; each element has the class `outline outline-<kind>`.
 pub(super) fn outlines(s: &mut String, building: &Building, floor: i64, lay: &Layout) {
@@ -37,11 +46,7 @@ pub(super) fn outlines(s: &mut String, building: &Building, floor: i64, lay: &La
     list.sort_by_key(|o| order(o.kind));
     let _ = writeln!(s, r#"<g class="outlines">"#);
     for o in list {
-        let pts: Vec<String> = o
-            .points
-            .iter()
-            .map(|p| format!("{:.1},{:.1}", lay.px(p[0]), lay.py(p[1])))
-            .collect();
+        let pts = svg_points(&o.points, lay);
         let tag = if o.kind == OutlineKind::Wall {
             "polyline"
         } else {
@@ -56,7 +61,7 @@ pub(super) fn outlines(s: &mut String, building: &Building, floor: i64, lay: &La
             s,
             r#"<{tag} class="outline outline-{}" points="{}">{title}</{tag}>"#,
             o.kind.as_str(),
-            pts.join(" ")
+            pts
         );
     }
     let _ = writeln!(s, "</g>");
@@ -74,17 +79,13 @@ pub(super) fn outline_lines(s: &mut String, building: &Building, floor: i64, lay
     }
     let _ = writeln!(s, r#"<g class="outline-lines">"#);
     for o in list {
-        let pts: Vec<String> = o
-            .points
-            .iter()
-            .map(|p| format!("{:.1},{:.1}", lay.px(p[0]), lay.py(p[1])))
-            .collect();
+        let pts = svg_points(&o.points, lay);
         let (tag, class) = if o.kind == OutlineKind::Wall {
             ("polyline", "outline-wall")
         } else {
             ("polygon", "outline-line")
         };
-        let _ = writeln!(s, r#"<{tag} class="{class}" points="{}"/>"#, pts.join(" "));
+        let _ = writeln!(s, r#"<{tag} class="{class}" points="{pts}"/>"#);
     }
     let _ = writeln!(s, "</g>");
 }

@@ -1,7 +1,8 @@
 //! Colours, the style sheet and XML escaping of the drawings.
 
-/// Escapes text for XML content and attribute values.
-pub(super) fn esc(s: &str) -> String {
+/// Escapes text for XML content and attribute values (the drawings and the experiment's
+/// charts).
+pub(crate) fn esc(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

@@ -18,7 +18,7 @@ use super::{Session, SessionStatus, Summary};
 use crate::building::Building;
 use crate::eval::{MISSING_DBM, WorldModel};
 use crate::gp::{Kernel, Point};
-use crate::samples::ARC_EPS;
+use crate::samples::{ARC_EPS, point_on_edge};
 use crate::synth::{AccessPoint, PropagationModel, PropagationParams};
 use crate::{Error, Result};
 
@@ -284,7 +284,7 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
                 let dt = stride / speed * 1000.0;
                 while next_scan <= self.t + dt {
                     let frac = ((s + stride * (next_scan - self.t) / dt) / len).clamp(0.0, 1.0);
-                    let p = lerp(&pa, &pb, frac);
+                    let p = point_on_edge(&pa, &pb, frac);
                     let readings = self.world.scan(&p, &mut self.rng);
                     self.emit(Event::Scan {
                         t_ms: (next_scan.round() as i64).max(self.t_ms()),
@@ -349,7 +349,7 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
                     break;
                 }
                 let frac = ((s - start_arc) / len).clamp(0.0, 1.0);
-                let p = lerp(&pa, &pb, frac);
+                let p = point_on_edge(&pa, &pb, frac);
                 self.t += dt;
                 self.pose_and_scan(&p)?;
                 next_k += 1;
@@ -400,22 +400,6 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
         })?;
         Ok(())
     }
-}
-
-/// Linear interpolation along an edge; on a stair the floor of the nearer end.
-fn lerp(pa: &Point, pb: &Point, frac: f64) -> Point {
-    let floor = if pa.floor == pb.floor || frac < 0.5 {
-        pa.floor
-    } else if frac > 0.5 {
-        pb.floor
-    } else {
-        pa.floor.min(pb.floor)
-    };
-    Point::new(
-        pa.x + frac * (pb.x - pa.x),
-        pa.y + frac * (pb.y - pa.y),
-        floor,
-    )
 }
 
 /// Walks the session's plan to the end and finishes the session (aborts it when the

@@ -275,15 +275,9 @@ impl Event {
     }
 }
 
-/// Where a session stands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SessionStatus {
-    Active,
-    Paused,
-    Finished,
-    Aborted,
-}
+/// Where a session stands: one type for the live session and the store, which reads it
+/// off the last lifecycle event.
+pub use crate::store::SessionStatus;
 
 /// A position estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -7,7 +7,7 @@ use std::path::Path;
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 use serde::Serialize;
 
-use super::{BuildingRef, building_id, now_ms, read_tx};
+use super::{BuildingRef, building_id, group_readings, now_ms, read_tx, write_tx};
 use crate::building::{BuildingFile, EdgeSpec, FORMAT, Fingerprint, FloorSpec, VertexSpec};
 use crate::gp::Kernel;
 use crate::{Building, Error, Result};
@@ -132,10 +132,7 @@ pub(super) fn import(
     source: Option<&str>,
     options: &ImportOptions<'_>,
 ) -> Result<ImportReport> {
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let out = import_in(&tx, b, source, options)?;
-    tx.commit()?;
-    Ok(out)
+    write_tx(conn, |tx| import_in(tx, b, source, options))
 }
 
 /// [`import`] inside a transaction the caller owns.
@@ -356,16 +353,7 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
             "SELECT name, vertex_count, edge_count, kernel_sf2, kernel_ell, kernel_sn2
              FROM buildings WHERE id = ?1",
             [id],
-            |r| {
-                Ok((
-                    r.get(0)?,
-                    r.get(1)?,
-                    r.get(2)?,
-                    r.get(3)?,
-                    r.get(4)?,
-                    r.get(5)?,
-                ))
-            },
+            |r| r.try_into(),
         )?;
         let floors = conn
             .prepare("SELECT floor, name FROM floors WHERE building_id = ?1 ORDER BY ord")?
@@ -421,25 +409,24 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
              WHERE f.building_id = ?1
              ORDER BY f.kind, f.ord",
         )?;
-        let mut rows = st.query([id])?;
-        let mut last_id = None;
-        while let Some(r) = rows.next()? {
-            let kind: String = r.get(0)?;
-            let fid: i64 = r.get(1)?;
-            let list = lists.entry(kind).or_default();
-            if last_id != Some(fid) {
-                list.push(Fingerprint {
+        let all = group_readings(
+            st.query([id])?,
+            1,
+            5,
+            |r| {
+                let kind: String = r.get(0)?;
+                let f = Fingerprint {
                     x: r.get(2)?,
                     y: r.get(3)?,
                     floor: r.get(4)?,
                     rss: BTreeMap::new(),
-                });
-                last_id = Some(fid);
-            }
-            let ap: Option<String> = r.get(5)?;
-            if let (Some(ap), Some(fp)) = (ap, list.last_mut()) {
-                fp.rss.insert(ap, r.get(6)?);
-            }
+                };
+                Ok((kind, f))
+            },
+            |(_, f)| &mut f.rss,
+        )?;
+        for (kind, f) in all {
+            lists.entry(kind).or_default().push(f);
         }
         let kernel = match (sf2, ell, sn2) {
             (Some(sf2), Some(ell), Some(sn2)) => Some(Kernel::new(sf2, ell, sn2)),

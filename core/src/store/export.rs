@@ -65,8 +65,9 @@ pub fn collected_csv(list: &[StoredCollected]) -> String {
     out
 }
 
-/// Quotes a CSV field if it holds a comma, a quote or a line break.
-fn csv_field(s: &str) -> String {
+/// Quotes a CSV field if it holds a comma, a quote or a line break (RFC 4180); the one rule
+/// of every CSV the crate writes (exports, radio maps, experiment tables).
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -91,4 +92,16 @@ pub fn collected_json(building: &str, list: &[StoredCollected]) -> String {
     };
     // Plain data with string keys and finite numbers (checked on the way in) serialises.
     serde_json::to_string_pretty(&doc).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_are_quoted_when_needed() {
+        assert_eq!(csv_field("a b"), "a b");
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("say \"x\""), "\"say \"\"x\"\"\"");
+    }
 }

@@ -3,7 +3,7 @@
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, building_id, read_tx};
+use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, read_tx};
 use crate::gp::Kernel;
 use crate::{Error, Result};
 
@@ -70,11 +70,7 @@ pub(super) fn record(
     let fit_id = tx.last_insert_rowid();
     {
         // An access point first met in a fit joins the building's list.
-        let mut ap = tx.prepare(
-            "INSERT INTO access_points (building_id, name) VALUES (?1, ?2)
-             ON CONFLICT (building_id, name) DO UPDATE SET name = excluded.name
-             RETURNING id",
-        )?;
+        let mut ap = tx.prepare(UPSERT_ACCESS_POINT)?;
         let mut link =
             tx.prepare("INSERT INTO fit_access_points (fit_id, ord, ap_id) VALUES (?1, ?2, ?3)")?;
         for (ord, name) in fit.aps_used.iter().enumerate() {
@@ -100,16 +96,7 @@ pub(super) fn latest(conn: &Connection, building: BuildingRef<'_>) -> Result<Opt
                 "SELECT id, fitted_ms, sf2, ell, sn2, log_likelihood FROM fits
                  WHERE building_id = ?1 ORDER BY fitted_ms DESC, id DESC LIMIT 1",
                 [bid],
-                |r| {
-                    Ok((
-                        r.get(0)?,
-                        r.get(1)?,
-                        r.get(2)?,
-                        r.get(3)?,
-                        r.get(4)?,
-                        r.get(5)?,
-                    ))
-                },
+                |r| r.try_into(),
             )
             .optional()?;
         let Some((id, fitted_ms, sf2, ell, sn2, log_likelihood)) = row else {

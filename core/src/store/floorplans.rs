@@ -3,7 +3,7 @@
 
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 
-use super::{BuildingRef, building_id};
+use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id};
 use crate::building::{Fingerprint, GeoOrigin, Outline};
 use crate::{Building, Error, Result};
 
@@ -83,11 +83,7 @@ pub(super) fn add_pilot(
             "INSERT INTO fingerprints (building_id, kind, ord, x, y, floor)
              VALUES (?1, 'pilot', ?2, ?3, ?4, ?5)",
         )?;
-        let mut st_ap = tx.prepare(
-            "INSERT INTO access_points (building_id, name) VALUES (?1, ?2)
-             ON CONFLICT (building_id, name) DO UPDATE SET name = excluded.name
-             RETURNING id",
-        )?;
+        let mut st_ap = tx.prepare(UPSERT_ACCESS_POINT)?;
         let mut st_rd = tx.prepare(
             "INSERT INTO fingerprint_readings (fingerprint_id, ap_id, rss) VALUES (?1, ?2, ?3)",
         )?;

@@ -38,6 +38,9 @@ pub use bundles::{
     BUNDLE_FORMAT, BundleBody, BundleEvent, BundleImportReport, BundlePlan, BundleSession,
     ExportOptions, MAX_BUNDLE_BYTES, parse_bundle, read_bundle_text,
 };
+// The CSV quoting rule of the research side's files too (radio maps, experiment tables).
+#[cfg(feature = "research")]
+pub(crate) use export::csv_field;
 pub use export::{collected_csv, collected_json};
 pub use fits::{FitRecord, StoredFit};
 pub use migrations::SCHEMA_VERSION;
@@ -469,6 +472,54 @@ impl Reader {
     ) -> Result<Vec<StoredCollected>> {
         sessions::collected(&self.conn, building.into(), session_id)
     }
+}
+
+/// Runs `f` in one immediate write transaction: its writes commit together, or none of
+/// them does when it fails (the transaction rolls back on drop). Immediate, so that two
+/// writers queue on the lock instead of failing half-way with `SQLITE_BUSY`.
+fn write_tx<T>(
+    conn: &mut Connection,
+    f: impl FnOnce(&rusqlite::Transaction<'_>) -> Result<T>,
+) -> Result<T> {
+    let tx = conn.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
+    let out = f(&tx)?;
+    tx.commit()?;
+    Ok(out)
+}
+
+/// Inserts an access point of a building if it is new, and returns its id either way
+/// (parameters: building id, name). One statement for every writer that meets access
+/// points (fits, pilot imports, collected scans), so they cannot disagree on the rule.
+const UPSERT_ACCESS_POINT: &str = "INSERT INTO access_points (building_id, name) VALUES (?1, ?2)
+             ON CONFLICT (building_id, name) DO UPDATE SET name = excluded.name
+             RETURNING id";
+
+/// Reads fingerprints joined with their readings: one row per reading (a fingerprint that
+/// heard nothing has one row with a NULL access point), a fingerprint's rows consecutive.
+/// Column `id_col` is the fingerprint's id, `ap_col` and the next one the access point's
+/// name and the RSS; `first` makes a fingerprint from its first row and `rss` is where its
+/// readings go. Pilot data and collected scans are both stored this way.
+fn group_readings<T>(
+    mut rows: rusqlite::Rows<'_>,
+    id_col: usize,
+    ap_col: usize,
+    mut first: impl FnMut(&rusqlite::Row<'_>) -> rusqlite::Result<T>,
+    rss: impl Fn(&mut T) -> &mut std::collections::BTreeMap<String, f64>,
+) -> rusqlite::Result<Vec<T>> {
+    let mut out: Vec<T> = Vec::new();
+    let mut last = None;
+    while let Some(r) = rows.next()? {
+        let id: i64 = r.get(id_col)?;
+        if last != Some(id) {
+            out.push(first(r)?);
+            last = Some(id);
+        }
+        let ap: Option<String> = r.get(ap_col)?;
+        if let (Some(ap), Some(t)) = (ap, out.last_mut()) {
+            rss(t).insert(ap, r.get(ap_col + 1)?);
+        }
+    }
+    Ok(out)
 }
 
 /// Runs `f` in a read transaction: all its statements see one committed snapshot, even

@@ -1,9 +1,9 @@
 //! Planning results: request, walk and figures, as the planner fills them in.
 
-use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
+use rusqlite::{Connection, OptionalExtension, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, building_id, read_tx};
+use super::{BuildingRef, building_id, read_tx, write_tx};
 use crate::gp::Kernel;
 use crate::{Error, Result};
 
@@ -79,10 +79,7 @@ pub(super) fn save(
     building: BuildingRef<'_>,
     plan: &PlanRecord,
 ) -> Result<i64> {
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let out = save_in(&tx, building, plan)?;
-    tx.commit()?;
-    Ok(out)
+    write_tx(conn, |tx| save_in(tx, building, plan))
 }
 
 /// Saves several plans of one building in one transaction (a team's): all or none.
@@ -91,13 +88,9 @@ pub(super) fn save_all(
     building: BuildingRef<'_>,
     plans: &[PlanRecord],
 ) -> Result<Vec<i64>> {
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let ids = plans
-        .iter()
-        .map(|p| save_in(&tx, building, p))
-        .collect::<Result<Vec<i64>>>()?;
-    tx.commit()?;
-    Ok(ids)
+    write_tx(conn, |tx| {
+        plans.iter().map(|p| save_in(tx, building, p)).collect()
+    })
 }
 
 /// [`save`] inside a transaction the caller owns (bundle import writes many

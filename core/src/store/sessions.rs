@@ -4,10 +4,10 @@
 
 use std::collections::BTreeMap;
 
-use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
+use rusqlite::{Connection, OptionalExtension, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, building_id, read_tx};
+use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, group_readings, read_tx, write_tx};
 use crate::{Error, Result};
 
 /// A fingerprint collected during a session: the RSS heard and where the surveyor was
@@ -91,8 +91,9 @@ pub struct StoredEvent {
     pub event: SessionEvent,
 }
 
-/// Where a session stands, read off its last lifecycle event (no event: active).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// Where a session stands, read off its last lifecycle event (no event: active); the live
+/// session ([`crate::session::Session`]) tracks the same status as events arrive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SessionStatus {
     Active,
@@ -132,10 +133,9 @@ pub(super) fn create(
     surveyor: Option<&serde_json::Value>,
     created_ms: i64,
 ) -> Result<i64> {
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let out = create_in(&tx, building, plan_id, surveyor, created_ms)?;
-    tx.commit()?;
-    Ok(out)
+    write_tx(conn, |tx| {
+        create_in(tx, building, plan_id, surveyor, created_ms)
+    })
 }
 
 /// [`create`] inside a transaction the caller owns (bundle import writes many
@@ -204,10 +204,7 @@ pub(super) fn append(
     at_ms: i64,
     event: &SessionEvent,
 ) -> Result<i64> {
-    let tx = conn.transaction_with_behavior(TransactionBehavior::Immediate)?;
-    let out = append_in(&tx, session_id, at_ms, event)?;
-    tx.commit()?;
-    Ok(out)
+    write_tx(conn, |tx| append_in(tx, session_id, at_ms, event))
 }
 
 /// [`append`] inside a transaction the caller owns (bundle import writes many
@@ -317,11 +314,7 @@ pub(super) fn append_in(
             params![session_id, seq, fp.x, fp.y, fp.floor, fp.sigma_m, fp.since_checkin_m],
         )?;
         let fid = tx.last_insert_rowid();
-        let mut ap = tx.prepare_cached(
-            "INSERT INTO access_points (building_id, name) VALUES (?1, ?2)
-             ON CONFLICT (building_id, name) DO UPDATE SET name = excluded.name
-             RETURNING id",
-        )?;
+        let mut ap = tx.prepare_cached(UPSERT_ACCESS_POINT)?;
         let mut rd = tx.prepare_cached(
             "INSERT INTO collected_readings (fingerprint_id, ap_id, rss) VALUES (?1, ?2, ?3)",
         )?;
@@ -340,16 +333,7 @@ fn scan_fingerprint(conn: &Connection, session_id: i64, seq: i64) -> Result<Coll
             "SELECT id, x, y, floor, sigma_m, since_checkin_m FROM collected_fingerprints
              WHERE session_id = ?1 AND seq = ?2",
         )?
-        .query_row(params![session_id, seq], |r| {
-            Ok((
-                r.get(0)?,
-                r.get(1)?,
-                r.get(2)?,
-                r.get(3)?,
-                r.get(4)?,
-                r.get(5)?,
-            ))
-        })?;
+        .query_row(params![session_id, seq], |r| r.try_into())?;
     let rss = conn
         .prepare_cached(
             "SELECT a.name, r.rss FROM collected_readings r JOIN access_points a ON a.id = r.ap_id
@@ -387,12 +371,7 @@ pub(super) fn events(
         )?;
         let rows = st
             .query_map(params![session_id, after_seq], |r| {
-                Ok((
-                    r.get::<_, i64>(0)?,
-                    r.get::<_, String>(1)?,
-                    r.get(2)?,
-                    r.get::<_, String>(3)?,
-                ))
+                <(i64, String, i64, String)>::try_from(r)
             })?
             .collect::<rusqlite::Result<Vec<_>>>()?;
         let mut out = Vec::with_capacity(rows.len());
@@ -435,15 +414,15 @@ pub(super) fn list(conn: &Connection, building: BuildingRef<'_>) -> Result<Vec<S
         )?;
         let rows = st
             .query_map([bid], |r| {
-                Ok((
-                    r.get::<_, i64>(0)?,
-                    r.get::<_, Option<i64>>(1)?,
-                    r.get::<_, i64>(2)?,
-                    r.get::<_, Option<String>>(3)?,
-                    r.get::<_, i64>(4)?,
-                    r.get::<_, Option<String>>(5)?,
-                    r.get::<_, i64>(6)?,
-                ))
+                <(
+                    i64,
+                    Option<i64>,
+                    i64,
+                    Option<String>,
+                    i64,
+                    Option<String>,
+                    i64,
+                )>::try_from(r)
             })?
             .collect::<rusqlite::Result<Vec<_>>>()?;
         rows.into_iter()
@@ -496,13 +475,12 @@ pub(super) fn collected(
              WHERE s.building_id = ?1 AND (?2 IS NULL OR c.session_id = ?2)
              ORDER BY c.session_id, c.seq",
         )?;
-        let mut rows = st.query(params![bid, session_id])?;
-        let mut out: Vec<StoredCollected> = Vec::new();
-        let mut last = None;
-        while let Some(r) = rows.next()? {
-            let fid: i64 = r.get(0)?;
-            if last != Some(fid) {
-                out.push(StoredCollected {
+        let out = group_readings(
+            st.query(params![bid, session_id])?,
+            0,
+            9,
+            |r| {
+                Ok(StoredCollected {
                     session_id: r.get(1)?,
                     seq: r.get(2)?,
                     at_ms: r.get(3)?,
@@ -514,14 +492,10 @@ pub(super) fn collected(
                         since_checkin_m: r.get(8)?,
                         rss: BTreeMap::new(),
                     },
-                });
-                last = Some(fid);
-            }
-            let ap: Option<String> = r.get(9)?;
-            if let (Some(ap), Some(c)) = (ap, out.last_mut()) {
-                c.fingerprint.rss.insert(ap, r.get(10)?);
-            }
-        }
+                })
+            },
+            |c| &mut c.fingerprint.rss,
+        )?;
         Ok(out)
     })
 }

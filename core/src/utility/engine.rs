@@ -788,10 +788,7 @@ mod tests {
         assert!(walk.len() >= 9, "{walk:?}");
         let mut obs = pilot_observations(&b.pilot_points());
         for s in crate::samples::sample_walk(&b, &walk, &model, &kernel).expect("samples") {
-            obs.push(Observation {
-                pos: s.pos,
-                extra_noise: s.extra_noise,
-            });
+            obs.push(Observation::from(&s));
         }
         let want = reference_utility(&kernel, &b.vertex_points(), &obs).expect("reference");
         let all: Vec<usize> = (0..b.len()).collect();

@@ -17,6 +17,16 @@ pub struct Observation {
     pub extra_noise: f64,
 }
 
+impl From<&crate::samples::Sample> for Observation {
+    /// A walk sample as the utility sees it: its position and its label noise.
+    fn from(s: &crate::samples::Sample) -> Self {
+        Observation {
+            pos: s.pos,
+            extra_noise: s.extra_noise,
+        }
+    }
+}
+
 /// `f_D(P)` in nats for vertex set `vertices`, observations `obs` (samples plus pilot).
 pub fn reference_utility(kernel: &Kernel, vertices: &[Point], obs: &[Observation]) -> Result<f64> {
     let nv = vertices.len();

@@ -1,4 +1,5 @@
-//! Helpers shared by the store tests (`core/tests/store_*.rs`).
+//! Helpers shared by the store tests (`core/tests/store_*.rs`) and the command-line tests
+//! (the binary, the demo building and route, reading a child's output).
 #![allow(dead_code)] // each test file uses a different subset
 #![allow(clippy::expect_used)] // test helpers may expect
 
@@ -20,6 +21,96 @@ pub fn shared_instance(name: &str) -> PathBuf {
 /// The store fixtures directory (`core/tests/fixtures/store`).
 pub fn fixtures() -> PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/store")).to_path_buf()
+}
+
+/// The demo building file (`core/data/demo-building.json`).
+pub const DEMO_BUILDING: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/demo-building.json");
+
+/// The demo route the command-line tests plan: from `f0-c00` to `f0-r5-door` within
+/// `budget` metres.
+pub fn demo_route(budget: &str) -> [&str; 6] {
+    [
+        "--start",
+        "f0-c00",
+        "--end",
+        "f0-r5-door",
+        "--budget",
+        budget,
+    ]
+}
+
+/// A quick robot survey of the demo building (30 m, 0.2 s of planning): one plan, one
+/// session and its collected fingerprints when run with `--db`.
+pub const SIMULATE_DEMO_ROBOT: [&str; 13] = [
+    "simulate",
+    "--building",
+    DEMO_BUILDING,
+    "--start",
+    "f0-c00",
+    "--end",
+    "f0-r5-door",
+    "--budget",
+    "30",
+    "--time-limit",
+    "0.2",
+    "--surveyor",
+    "robot",
+];
+
+/// Everything a spawned child wrote to its (piped) stderr, read to the end.
+pub fn read_stderr(child: &mut std::process::Child) -> String {
+    use std::io::Read as _;
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut stderr)
+        .expect("stderr");
+    stderr
+}
+
+/// Splits a command line into arguments as a shell does for plain words and double
+/// quotes (all the README and the tool's printed next steps use).
+pub fn shell_words(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let (mut quoted, mut any) = (false, false);
+    for c in line.chars() {
+        match c {
+            '"' => {
+                quoted = !quoted;
+                any = true;
+            }
+            ' ' if !quoted => {
+                if any || !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                }
+                any = false;
+            }
+            _ => cur.push(c),
+        }
+    }
+    assert!(!quoted, "unbalanced quotes in {line:?}");
+    if any || !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+/// Runs the binary with `args` (no `--db`).
+pub fn trailprint(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("run trailprint")
+}
+
+/// The name of the demo building (`trailprint::synth::DEMO_BUILDING_JSON`).
+pub fn demo_name() -> String {
+    trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
+        .expect("demo")
+        .name
 }
 
 /// Runs the binary with `--db db` and `args`.

@@ -29,12 +29,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
     // Names are printed escaped: a name is data from a file, and one made of terminal
     // escape sequences must not drive the terminal.
     let names: Vec<String> = list.iter().map(|b| printable(&b.name)).collect();
-    let width = names
-        .iter()
-        .map(|n| n.chars().count())
-        .max()
-        .unwrap_or(4)
-        .max(4);
+    let width = crate::store_cli::column_width(&names, 4);
     println!(
         "{:>4}  {:<width$}  {:>6} {:>8} {:>6} {:>6} {:>6} {:>6} {:>5} {:>5} {:>8} {:>9}",
         "id",

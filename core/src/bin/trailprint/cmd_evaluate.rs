@@ -8,7 +8,7 @@ use clap::Args as ClapArgs;
 use trailprint::eval::{
     EvalOptions, Evaluator, LabelledFingerprint, Localizer, evaluate_collected,
 };
-use trailprint::gp::Point;
+use trailprint::gp::{Kernel, Point};
 use trailprint::samples::sample_walk;
 use trailprint::session::SessionLog;
 use trailprint::store::BuildingRef;
@@ -76,10 +76,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     } else {
         sample_walk(&b, &walk, &model, &kernel)?
     };
-    let options = EvalOptions {
-        grid_step_m: a.grid_step,
-        ..EvalOptions::default()
-    };
+    let options = a.eval_options();
     let started = Instant::now();
     let report = Evaluator::new(&b, &kernel, options)?.evaluate_samples_with(
         &samples,
@@ -100,12 +97,8 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "length_m": length,
             "access_points": report.access_points,
             "grid_points": report.grid_points,
-            "seed": a.seed,
-            "kernel": kernel,
-            "kernel_source": source,
-            "elapsed_ms": elapsed_ms,
         });
-        println!("{}", json_line(&out)?);
+        print_json(out, &a, &kernel, &source, elapsed_ms)?;
     } else {
         println!(
             "localization error ({}): mean {:.2} m, median {:.2} m, p90 {:.2} m",
@@ -127,6 +120,35 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             kernel.sn2,
         );
     }
+    Ok(())
+}
+
+impl Args {
+    /// The evaluation options: `--grid-step`, the rest at their defaults.
+    fn eval_options(&self) -> EvalOptions {
+        EvalOptions {
+            grid_step_m: self.grid_step,
+            ..EvalOptions::default()
+        }
+    }
+}
+
+/// Prints a `--json` result with the fields both kinds of evaluation end with: the seed,
+/// the kernel and where it came from, and the time taken.
+fn print_json(
+    mut out: serde_json::Value,
+    a: &Args,
+    kernel: &Kernel,
+    source: &str,
+    elapsed_ms: u64,
+) -> Result<()> {
+    if let Some(obj) = out.as_object_mut() {
+        obj.insert("seed".into(), a.seed.into());
+        obj.insert("kernel".into(), serde_json::json!(kernel));
+        obj.insert("kernel_source".into(), source.into());
+        obj.insert("elapsed_ms".into(), elapsed_ms.into());
+    }
+    println!("{}", json_line(&out)?);
     Ok(())
 }
 
@@ -155,10 +177,7 @@ fn run_session(a: &Args, id: i64, db: Option<&std::path::Path>) -> Result<()> {
             }
         })
         .collect();
-    let options = EvalOptions {
-        grid_step_m: a.grid_step,
-        ..EvalOptions::default()
-    };
+    let options = a.eval_options();
     let started = Instant::now();
     let r = evaluate_collected(&b, &kernel, &collected, &options, a.localizer, a.seed)?;
     let elapsed_ms = started.elapsed().as_millis() as u64;
@@ -181,12 +200,8 @@ fn run_session(a: &Args, id: i64, db: Option<&std::path::Path>) -> Result<()> {
             "std_p90_db": r.std_p90_db,
             "std_max_db": r.std_max_db,
             "grid_points": r.grid_points,
-            "seed": a.seed,
-            "kernel": kernel,
-            "kernel_source": source,
-            "elapsed_ms": elapsed_ms,
         });
-        println!("{}", json_line(&out)?);
+        print_json(out, a, &kernel, source, elapsed_ms)?;
     } else {
         match loc {
             Some(l) => println!(

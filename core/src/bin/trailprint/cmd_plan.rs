@@ -70,10 +70,6 @@ pub struct Args {
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
     let settings = PlanSettings {
-        model: a.model.model()?,
-        algorithm: a.algorithm,
-        seed: a.seed,
-        time_limit: crate::opts::time_limit(a.time_limit)?,
         params: Params {
             population: a.population,
             generations: a.generations,
@@ -84,6 +80,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             iterations: a.iterations,
         },
         memory_budget: a.memory_budget.saturating_mul(1 << 20),
+        ..crate::opts::plan_settings(&a.model, a.algorithm, a.seed, a.time_limit)?
     };
     let model = settings.model;
     let route = a.route;
@@ -154,15 +151,12 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",
             kernel.sf2, kernel.ell, kernel.sn2
         );
-        println!("walk          {}", r.walk.join(","));
-        println!(
-            "length        {:.1} m of the {} m budget",
-            r.length_m, r.budget_m
-        );
-        println!(
-            "samples       {} ({})",
-            r.samples,
-            crate::walk_text::model_text(&model)
+        crate::walk_text::print_walk_summary(
+            &r.walk,
+            r.length_m,
+            r.budget_m,
+            r.samples as u64,
+            &model,
         );
         println!(
             "utility       {:.3} nats (mutual information of the samples and the radio map)",

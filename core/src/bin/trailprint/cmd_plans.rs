@@ -153,18 +153,8 @@ fn list(name: Option<&str>, json: bool, db: Option<&Path>) -> Result<()> {
         .iter()
         .map(|r| format!("{} -> {}", printable(r.start), printable(r.end)))
         .collect();
-    let nw = names
-        .iter()
-        .map(|n| n.chars().count())
-        .max()
-        .unwrap_or(8)
-        .max(8);
-    let ew = ends
-        .iter()
-        .map(|n| n.chars().count())
-        .max()
-        .unwrap_or(5)
-        .max(5);
+    let nw = crate::store_cli::column_width(&names, 8);
+    let ew = crate::store_cli::column_width(&ends, 5);
     println!(
         "{:>4}  {:<nw$}  {:<ew$}  {:>8} {:>8} {:>7} {:>9}  {:<16} {:<8} created (UTC)",
         "id",
@@ -279,16 +269,7 @@ fn show(a: &ShowArgs, db: Option<&Path>) -> Result<()> {
         r.kernel.sf2, r.kernel.ell, r.kernel.sn2
     );
     println!("created       {} UTC", utc_text(r.created_ms));
-    println!("walk          {}", r.walk.join(","));
-    println!(
-        "length        {:.1} m of the {} m budget",
-        r.length_m, r.budget_m
-    );
-    println!(
-        "samples       {} ({})",
-        r.samples,
-        crate::walk_text::model_text(&model)
-    );
+    crate::walk_text::print_walk_summary(&r.walk, r.length_m, r.budget_m, r.samples, &model);
     println!("utility       {:.3} nats", r.utility_nats);
     crate::walk_text::print_walk(&b, &walk, r.length_m, &model, a.speed, a.instructions);
     Ok(())

@@ -94,12 +94,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
         println!("no sessions (start one with `trailprint simulate` or the app)");
         return Ok(());
     }
-    let width = rows
-        .iter()
-        .map(|r| r.building.chars().count())
-        .max()
-        .unwrap_or(8)
-        .max(8);
+    let width = crate::store_cli::column_width(rows.iter().map(|r| &r.building), 8);
     println!(
         "{:>4}  {:<width$}  {:<8} {:<8} {:>9} {:>8} {:>7} {:>7} {:>9}",
         "id",

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use clap::Args as ClapArgs;
 use trailprint::Result;
-use trailprint::plan::{Algorithm, PlanSettings};
+use trailprint::plan::Algorithm;
 use trailprint::store::StoreTeamRequest;
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
 
@@ -47,13 +47,7 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let settings = PlanSettings {
-        model: a.model.model()?,
-        algorithm: a.algorithm,
-        seed: a.seed,
-        time_limit: crate::opts::time_limit(a.time_limit)?,
-        ..PlanSettings::default()
-    };
+    let settings = crate::opts::plan_settings(&a.model, a.algorithm, a.seed, a.time_limit)?;
     let control = trailprint::plan::Control::new();
     // A building from the database is planned and saved by the store, as on the phone; a
     // file has nowhere to keep the plans, nothing collected and no stored fit.

@@ -6,7 +6,7 @@ use std::path::Path;
 use trailprint::Result;
 
 use crate::opts::json_line;
-use crate::store_cli::{load_building, printable};
+use crate::store_cli::{column_width, load_building, printable};
 use crate::walk_text::floor_name;
 
 #[derive(clap::Args)]
@@ -76,28 +76,12 @@ pub fn run(a: &Args, db: Option<&Path>) -> Result<()> {
             String::new()
         }
     );
-    let idw = rows
+    let idw = column_width(rows.iter().map(|r| printable(&r.id)), 2);
+    let labels = rows
         .iter()
-        .map(|r| printable(&r.id).chars().count())
-        .max()
-        .unwrap_or(2)
-        .max(2);
-    let lw = rows
-        .iter()
-        .map(|r| {
-            r.label
-                .as_deref()
-                .map_or(1, |l| printable(l).chars().count())
-        })
-        .max()
-        .unwrap_or(5)
-        .clamp(5, 30);
-    let fw = rows
-        .iter()
-        .map(|r| r.floor_name.chars().count())
-        .max()
-        .unwrap_or(5)
-        .max(5);
+        .map(|r| r.label.as_deref().map_or(String::new(), printable));
+    let lw = column_width(labels, 5).min(30);
+    let fw = column_width(rows.iter().map(|r| &r.floor_name), 5);
     println!(
         "{:<idw$}  {:<lw$}  {:<fw$}  {:>9} {:>9}  neighbours",
         "id", "label", "floor", "x_m", "y_m"

@@ -151,6 +151,23 @@ pub fn time_limit(seconds: Option<f64>) -> Result<Option<std::time::Duration>> {
     }
 }
 
+/// The plan settings `plan` and `team-plan` share: the surveyor model, the planner, its
+/// seed and `--time-limit`; planner parameters and memory budget at their defaults.
+pub fn plan_settings(
+    model: &ModelOpts,
+    algorithm: trailprint::plan::Algorithm,
+    seed: u64,
+    time_limit_s: Option<f64>,
+) -> Result<trailprint::plan::PlanSettings> {
+    Ok(trailprint::plan::PlanSettings {
+        model: model.model()?,
+        algorithm,
+        seed,
+        time_limit: time_limit(time_limit_s)?,
+        ..trailprint::plan::PlanSettings::default()
+    })
+}
+
 /// Where a walk starts and ends, and how long it may be.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct RouteOpts {

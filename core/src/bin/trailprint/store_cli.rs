@@ -230,3 +230,14 @@ pub fn printable(name: &str) -> String {
         .replace("\\\"", "\"")
         .replace("\\'", "'")
 }
+
+/// The width of a table column: its widest cell in characters, at least `min` (the
+/// header's width).
+pub fn column_width<S: AsRef<str>>(cells: impl IntoIterator<Item = S>, min: usize) -> usize {
+    cells
+        .into_iter()
+        .map(|c| c.as_ref().chars().count())
+        .max()
+        .unwrap_or(min)
+        .max(min)
+}

@@ -3,11 +3,11 @@
 //! ([`trailprint::session::tracker::guidance_sentence`]).
 
 use trailprint::building::Building;
-use trailprint::samples::{SurveyorModel, is_turn_checkin};
+use trailprint::samples::{SurveyorModel, check_in_flags};
 use trailprint::session::tracker::{classify_turn, guidance_sentence};
 use trailprint::session::types::Turn;
 
-use crate::store_cli::printable;
+use crate::store_cli::{column_width, printable};
 
 /// The name a person uses for a floor: its name, else "floor N".
 pub fn floor_name(b: &Building, floor: i64) -> String {
@@ -34,22 +34,13 @@ pub fn duration_text(seconds: f64) -> String {
 /// turn sharper than the threshold and every change of floor (human); start and end only
 /// for a robot, which needs none.
 pub fn check_ins(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<bool> {
-    let n = walk.len();
-    let mut out = vec![false; n];
-    if n == 0 {
-        return out;
-    }
-    out[0] = true;
-    out[n - 1] = true;
-    if let SurveyorModel::Human {
-        turn_threshold_deg, ..
-    } = *model
-    {
-        for i in 1..n.saturating_sub(1) {
-            out[i] = is_turn_checkin(b, walk[i - 1], walk[i], walk[i + 1], turn_threshold_deg);
-        }
-    }
-    out
+    let threshold = match *model {
+        SurveyorModel::Human {
+            turn_threshold_deg, ..
+        } => Some(turn_threshold_deg),
+        SurveyorModel::Robot { .. } => None,
+    };
+    check_in_flags(b, walk, threshold)
 }
 
 /// Arc length from the start at each vertex of the walk, metres.
@@ -73,23 +64,14 @@ pub fn steps_table(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<S
     let arc = arcs(b, walk);
     let checks = check_ins(b, walk, model);
     let human = matches!(model, SurveyorModel::Human { .. });
-    let id_w = walk
-        .iter()
-        .map(|&v| printable(&b.vertices[v].id).chars().count())
-        .max()
-        .unwrap_or(6)
-        .max(6);
-    let label_w = walk
-        .iter()
-        .map(|&v| {
-            b.vertices[v]
-                .label
-                .as_deref()
-                .map_or(1, |l| printable(l).chars().count())
-        })
-        .max()
-        .unwrap_or(5)
-        .clamp(5, 28);
+    let id_w = column_width(walk.iter().map(|&v| printable(&b.vertices[v].id)), 6);
+    let labels = walk.iter().map(|&v| {
+        b.vertices[v]
+            .label
+            .as_deref()
+            .map_or(String::new(), printable)
+    });
+    let label_w = column_width(labels, 5).min(28);
     let floors = b.floors.len() > 1;
     let mut lines = vec![format!(
         "  {:>4}  {:<id_w$}  {:<label_w$}  {}{:>8}{}",
@@ -196,6 +178,20 @@ pub fn instructions(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<
         lines.push("The walk is this one vertex: scan there and finish.".into());
     }
     lines
+}
+
+/// The walk, length and samples lines of a plan's summary, as `trailprint plan` and
+/// `trailprint plans show` print them.
+pub fn print_walk_summary(
+    walk: &[String],
+    length_m: f64,
+    budget_m: f64,
+    samples: u64,
+    model: &SurveyorModel,
+) {
+    println!("walk          {}", walk.join(","));
+    println!("length        {length_m:.1} m of the {budget_m} m budget");
+    println!("samples       {samples} ({})", model_text(model));
 }
 
 /// The surveyor model in words: "robot, a scan every 0.5 m" or "human at 1.2 m/s, a scan
