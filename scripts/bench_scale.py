@@ -23,8 +23,11 @@ BUILDINGS = [
     ("office", ["--rooms", "4", "--corridor-length", "40", "--room-depth", "8"]),
     ("campus", ["--floors", "2", "--rooms", "6", "--corridor-length", "48", "--room-depth", "8"]),
     ("mall", ["--rooms", "12", "--corridor-length", "120", "--room-depth", "12"]),
-    ("huge", ["--rooms", "40", "--corridor-length", "400", "--room-depth", "24"]),
+    ("huge", ["--rooms", "64", "--corridor-length", "640", "--room-depth", "24"]),
 ]
+# The generated 5,057-vertex floor's pilot data cannot be fitted (no access point is heard
+# at half of its 20 pilot locations, SPEC 2), so its rows take a kernel like the others'.
+KERNELS = {"huge": "62.6,7.9,4.2"}
 
 
 def total_length(path):
@@ -46,11 +49,13 @@ def degrees(path):
     return deg
 
 
-def plan(path, budget, alg, limit, model, seed=1):
+def plan(path, budget, alg, limit, model, seed=1, kernel=None):
     # One core, as the targets are stated: pinned, and rayon told so.
     cmd = ["taskset", "-c", CPU, "/usr/bin/time", "-f", "%e %M", BIN, "plan", "--building", path, "--start", "f0-c00",
            "--end", "f0-c00", "--budget", f"{budget:.1f}", "--algorithm", alg, "--model", model,
            "--seed", str(seed), "--json"]
+    if kernel:
+        cmd += ["--kernel", kernel]
     if limit is not None:
         cmd += ["--time-limit", str(limit)]
     env = dict(os.environ, RAYON_NUM_THREADS="1")
@@ -71,50 +76,22 @@ def plan(path, budget, alg, limit, model, seed=1):
     return out
 
 
-def main():
-    global CPU
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--long", type=float, default=0)
-    ap.add_argument("--model", default="robot,human", help="comma-separated: robot, human")
-    ap.add_argument("--only", default="", help="comma-separated building names")
-    ap.add_argument("--cpu", default="0", help="the core every plan is pinned to")
-    ap.add_argument("--out", default="")
-    a = ap.parse_args()
-    CPU = a.cpu
-    tmp = tempfile.mkdtemp()
-    rows = []
-    for name, args in BUILDINGS:
-        if a.only and name not in a.only.split(","):
-            continue
-        path = os.path.join(tmp, f"{name}.json")
-        subprocess.run([BIN, "generate", "--out", path, "--name", name, *args], check=True,
-                       capture_output=True)
-        nv, tot = total_length(path)
-        for model in a.model.split(","):
-            for frac in (0.25, 0.5, 1.0):
-                budget = frac * tot
-                cov = plan(path, budget, "coverage", None, model)
-                auto = plan(path, budget, "auto", None, model)
-                row = dict(building=name, model=model, vertices=nv, edges_m=tot, budget=budget,
-                           coverage=cov, auto=auto)
-                if a.long:
-                    row["auto_long"] = plan(path, budget, "auto", a.long, model)
-                rows.append(row)
-                print(json.dumps(row), file=sys.stderr, flush=True)
-    long_h = f" auto {a.long:g} s nats | 2 s / {a.long:g} s |" if a.long else ""
+def render(rows, long):
+    """The Markdown table and the target summary of benchmark rows."""
+    long_h = f" auto {long:g} s nats | 2 s / {long:g} s |" if long else ""
     lines = ["| building | model | vertices | budget m | coverage nats | auto nats | auto / coverage | auto length / budget | auto wall s | auto peak MiB | reversals per 100 m |" + long_h,
-             "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if a.long else "")]
+             "|---|---|---|---|---|---|---|---|---|---|---|" + ("---|---|" if long else "")]
     ratios, long_ratios, notes = [], [], []
     for r in rows:
         c, u = r["coverage"], r["auto"]
         if "error" in u:
-            lines.append(f"| {r['building']} | {r['model']} | {r['vertices']} | {r['budget']:.0f} | {c.get('utility', float('nan')):.2f} | refused: {u['error'][:200]} | | | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | |" + (" | |" if a.long else ""))
+            lines.append(f"| {r['building']} | {r['model']} | {r['vertices']} | {r['budget']:.0f} | {c.get('utility', float('nan')):.2f} | refused: {u['error'][:200]} | | | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | |" + (" | |" if long else ""))
             continue
         ratio = u["utility"] / c["utility"]
         ratios.append(ratio)
         line = (f"| {r['building']} | {r['model']} | {r['vertices']} | {r['budget']:.0f} | {c['utility']:.2f} | {u['utility']:.2f} | "
                 f"{ratio:.3f} | {u['length'] / r['budget']:.3f} | {u['wall_s']:.2f} | {u['rss_mb']:.0f} | {u['reversals_per_100m']:.2f} |")
-        if a.long:
+        if long:
             l = r["auto_long"]
             lr = u["utility"] / l.get("utility", float("nan"))
             long_ratios.append(lr)
@@ -129,9 +106,52 @@ def main():
     if ratios:
         notes.append(f"auto / coverage: mean {sum(ratios) / len(ratios):.3f}, min {min(ratios):.3f} over {len(ratios)} rows")
     if long_ratios:
-        notes.append(f"auto 2 s / auto {a.long:g} s: min {min(long_ratios):.3f}")
+        notes.append(f"auto 2 s / auto {long:g} s: min {min(long_ratios):.3f}")
     notes.append("utility grows with the budget on every building and model: " + ("yes" if mono else "NO"))
-    text = "\n".join(lines + [""] + [f"- {n}" for n in notes])
+    return "\n".join(lines + [""] + [f"- {n}" for n in notes])
+
+
+def main():
+    global CPU
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--long", type=float, default=0)
+    ap.add_argument("--model", default="robot,human", help="comma-separated: robot, human")
+    ap.add_argument("--only", default="", help="comma-separated building names")
+    ap.add_argument("--cpu", default="0", help="the core every plan is pinned to")
+    ap.add_argument("--out", default="")
+    ap.add_argument("--rows", nargs="*", default=None,
+                    help="re-render the JSON rows a run printed on stderr (no planning)")
+    a = ap.parse_args()
+    CPU = a.cpu
+    if a.rows is not None:
+        rows = [json.loads(l) for f in a.rows for l in open(f) if l.strip()]
+        text = render(rows, a.long)
+        print(text)
+        if a.out:
+            open(a.out, "w").write(text + "\n")
+        return
+    tmp = tempfile.mkdtemp()
+    rows = []
+    for name, args in BUILDINGS:
+        if a.only and name not in a.only.split(","):
+            continue
+        path = os.path.join(tmp, f"{name}.json")
+        subprocess.run([BIN, "generate", "--out", path, "--name", name, *args], check=True,
+                       capture_output=True)
+        nv, tot = total_length(path)
+        for model in a.model.split(","):
+            for frac in (0.25, 0.5, 1.0):
+                budget = frac * tot
+                k = KERNELS.get(name)
+                cov = plan(path, budget, "coverage", None, model, kernel=k)
+                auto = plan(path, budget, "auto", None, model, kernel=k)
+                row = dict(building=name, model=model, vertices=nv, edges_m=tot, budget=budget,
+                           coverage=cov, auto=auto)
+                if a.long:
+                    row["auto_long"] = plan(path, budget, "auto", a.long, model, kernel=k)
+                rows.append(row)
+                print(json.dumps(row), file=sys.stderr, flush=True)
+    text = render(rows, a.long)
     print(text)
     if a.out:
         open(a.out, "w").write(text + "\n")

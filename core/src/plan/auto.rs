@@ -9,8 +9,9 @@
 //!    full budget.
 //! 1. **Greedy**, the feasible-candidates variant of the paper's Algorithm 1 (the
 //!    paper's rule stops as soon as the best-ratio vertex does not fit, which on a closed
-//!    walk can be the very first round); the better of it and stage 0 goes on.
-//! 2. **Local search** ([`LocalSearch`]) from the greedy walk: detour insert, segment
+//!    walk can be the very first round).
+//! 2. **Local search** ([`LocalSearch`]) from the greedy walk and from the spread walk:
+//!    detour insert, segment
 //!    replace, re-route, shortcut and 2-opt moves, evaluated in parallel from the shared
 //!    prefix.
 //!    Then, on small buildings (at most [`SIMPLE_NODE_CAP`] nodes), the best *simple*
@@ -170,19 +171,27 @@ impl Solver for Auto {
         let g = Greedy::feasible().solve(p, run)?;
         let (mut walk, mut util) = (g.walk, g.utility);
         used += p.building.len() * 4;
-        if better((&spread, spread_u), (&walk, util)) {
-            walk = spread.clone();
-            util = spread_u;
-        }
-        report(0.1, util, "greedy");
+        report(0.1, util.max(spread_u), "greedy");
 
-        // 2. Local search from the greedy walk.
+        // 2. Local search from the greedy walk, then from the spread walk (a different
+        //    basin: it reaches the far side of the building from the first step).
         let (w, u, n) = LocalSearch::new(self.seed).improve_counted(p, run, walk.clone(), util)?;
         used += n;
         let greedy_walk = walk.clone();
         if better((&w, u), (&walk, util)) {
             walk = w;
             util = u;
+        }
+        if spread != greedy_walk && !run.should_stop() {
+            let ls = LocalSearch::new(self.seed ^ 0x5eed_5eed);
+            let (w, u, n) = ls.improve_counted(p, run, spread.clone(), spread_u)?;
+            used += n;
+            for (w, u) in [(w, u), (spread, spread_u)] {
+                if better((&w, u), (&walk, util)) {
+                    walk = w;
+                    util = u;
+                }
+            }
         }
         report(0.2, util, "local search");
 
@@ -205,7 +214,7 @@ impl Solver for Auto {
             let gens = prm.generations.max(1);
             let afford = (budget_evals as f64 * 0.4 / (gens + 1) as f64) as usize;
             prm.population = prm.population.min(afford).max(20);
-            let ga = Genetic::new(prm, self.seed).with_seeds(vec![walk.clone(), greedy_walk, spread]);
+            let ga = Genetic::new(prm, self.seed).with_seeds(vec![walk.clone(), greedy_walk]);
             let (pp, _) = ga.evolve(p, run)?;
             used += prm.population * (gens + 1);
             if let Some(b) = pp.first()

@@ -193,7 +193,10 @@ pub fn leg(
     let fits = |l: f64| l <= spec.budget + super::BUDGET_EPS;
     let mut first = true;
     loop {
-        if run.should_stop() {
+        // Only a cancel stops a construction, not the time limit: a leg costs
+        // milliseconds, and on a building whose set-up (metric closure, engine) used up
+        // the limit, a construction cut at its first step would leave a plan of nothing.
+        if run.control_cancelled() {
             break;
         }
         let dead_end = b.neighbours(cur).len() <= 1;

@@ -20,8 +20,8 @@ pub struct Args {
     /// (default: the file's kernel, else fitted on its pilot data). Repeatable.
     #[arg(long = "case", required = true)]
     cases: Vec<String>,
-    /// Algorithms to run, comma-separated (default: all).
-    #[arg(long, default_value = "greedy,genetic,recursive-greedy,ero,exact,auto")]
+    /// Algorithms to run, comma-separated (default: all, the `coverage` baseline too).
+    #[arg(long, default_value = "greedy,genetic,recursive-greedy,ero,exact,auto,coverage")]
     algorithms: String,
     /// Seeds, comma-separated (deterministic algorithms run once with the first).
     #[arg(long, default_value = "1,2,3")]

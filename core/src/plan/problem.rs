@@ -1,0 +1,138 @@
+//! One planning instance ([`Problem`]: building, engine, metric closure, end points and
+//! budget as indices) and what a solver returns ([`Outcome`]).
+
+use std::sync::Arc;
+
+
+use crate::building::Building;
+use crate::gp::Kernel;
+use crate::samples::SurveyorModel;
+use crate::utility::UtilityEngine;
+use crate::{Error, Result};
+
+use super::{BUDGET_EPS, Metric, Run, Termination};
+
+/// One planning instance: the building with its engine and metric closure, and the
+/// request's end points and budget (as indices).
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub building: Arc<Building>,
+    pub engine: UtilityEngine,
+    pub metric: Arc<Metric>,
+    pub start: usize,
+    pub end: usize,
+    pub budget: f64,
+}
+
+impl Problem {
+    /// Builds the engine (conditioned on the pilot data) and the metric closure.
+    pub fn new(
+        building: Arc<Building>,
+        kernel: Kernel,
+        model: SurveyorModel,
+        start: usize,
+        end: usize,
+        budget: f64,
+    ) -> Result<Self> {
+        let engine = UtilityEngine::new(building.clone(), kernel, model)?;
+        let metric = Arc::new(Metric::new(&building));
+        Ok(Problem {
+            building,
+            engine,
+            metric,
+            start,
+            end,
+            budget,
+        })
+    }
+
+    /// Same building, engine and metric, other end points or budget.
+    pub fn with_ends(&self, start: usize, end: usize, budget: f64) -> Self {
+        Problem {
+            start,
+            end,
+            budget,
+            ..self.clone()
+        }
+    }
+
+    /// Whether a length fits the budget.
+    pub fn fits(&self, length: f64) -> bool {
+        length <= self.budget + BUDGET_EPS
+    }
+
+    /// `C(P)` of a walk of adjacent vertices.
+    pub fn length(&self, walk: &[usize]) -> f64 {
+        self.building.walk_length(walk)
+    }
+
+    /// `f_D(P)`.
+    pub fn utility(&self, walk: &[usize]) -> Result<f64> {
+        self.engine.utility(walk)
+    }
+
+    /// Offers a feasible walk to the run as its best so far (see [`Run::offer`]);
+    /// infeasible walks are ignored.
+    pub fn offer(&self, run: &Run, walk: &[usize], utility: f64) {
+        let len = self.length(walk);
+        if walk.first() == Some(&self.start) && walk.last() == Some(&self.end) && self.fits(len) {
+            run.offer(walk, utility, len);
+        }
+    }
+
+    /// `f_D` of many walks in parallel.
+    pub fn utilities(&self, walks: &[Vec<usize>]) -> Result<Vec<f64>> {
+        self.engine.utilities(walks).into_iter().collect()
+    }
+
+    /// The shortest walk from start to end.
+    pub fn shortest_walk(&self) -> Vec<usize> {
+        self.metric.path(self.start, self.end)
+    }
+
+    /// Whether `walk` is a feasible answer: real edges, right ends, within budget.
+    pub fn check(&self, walk: &[usize]) -> Result<()> {
+        self.building.check_walk(walk)?;
+        let bad = |m: String| {
+            Err(Error::InvalidWalk {
+                step: 0,
+                message: m,
+            })
+        };
+        match (walk.first(), walk.last()) {
+            (Some(&a), Some(&b)) if a == self.start && b == self.end => {}
+            _ => return bad("the walk does not run from the start to the end".into()),
+        }
+        let len = self.length(walk);
+        if !self.fits(len) {
+            return bad(format!(
+                "the walk is {len} m long, over the budget of {} m",
+                self.budget
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A solver's answer before it is dressed as a [`PlanResult`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    pub walk: Vec<usize>,
+    pub utility: f64,
+    pub termination: Termination,
+    pub optimal: Option<bool>,
+    pub nodes: Option<u64>,
+}
+
+impl Outcome {
+    /// A heuristic's answer.
+    pub fn new(walk: Vec<usize>, utility: f64, termination: Termination) -> Self {
+        Outcome {
+            walk,
+            utility,
+            termination,
+            optimal: None,
+            nodes: None,
+        }
+    }
+}
