@@ -126,6 +126,41 @@ fn every_algorithm_honours_its_time_limit_on_a_large_building() {
     }
 }
 
+/// A limit used up by set-up alone (here 1 ms: the metric closure and the engine take
+/// longer) still gives a walk of the whole budget, on a large building (the scale search's
+/// constructions) and on a small one (auto's stage 0), not the shortest walk.
+#[test]
+fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
+    let _serial = crate::serial();
+    let (office, k) = office();
+    let area_two = Arc::new(
+        Building::from_json(
+            include_str!("fixtures/area-two.json"),
+            "fixtures/area-two.json",
+        )
+        .expect("area two"),
+    );
+    let k2 = fit_kernel(&area_two.pilot).expect("fit").kernel;
+    for (b, k, budget) in [(office, k, 200.0), (area_two, k2, 100.0)] {
+        let start = b.vertices[0].id.clone();
+        let mut req = PlanRequest::new(&start, &start, budget, k);
+        req.time_limit = Some(Duration::from_millis(1));
+        let r = plan(b.clone(), &req, &Control::new()).expect("plan");
+        assert!(
+            r.length_m >= 0.9 * budget && r.length_m <= budget + 1e-9,
+            "{}: auto walked {} m of {budget} m under a 1 ms limit",
+            b.name,
+            r.length_m
+        );
+        assert_eq!(r.termination, Termination::TimeLimit, "{}", b.name);
+        let exact = UtilityEngine::new(b.clone(), k, req.model)
+            .expect("engine")
+            .utility(&r.walk_indices)
+            .expect("utility");
+        assert!((exact - r.utility_nats).abs() <= 1e-9 * exact, "{}", b.name);
+    }
+}
+
 #[derive(Default)]
 struct Last {
     lengths: Mutex<Vec<f64>>,

@@ -148,7 +148,11 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
     // f_{D + collected} of its walk (the collected data counts; subtracting the collected
     // data's own value leaves what the walk adds).
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
-    assert!(close(fresh.utility_nats, fresh_worth), "fresh report {}", fresh.utility_nats);
+    assert!(
+        close(fresh.utility_nats, fresh_worth),
+        "fresh report {}",
+        fresh.utility_nats
+    );
     let informed_total = with_prior.utility(&informed.walk_indices).expect("u");
     assert!(
         close(informed.utility_nats, informed_total),

@@ -182,15 +182,19 @@ impl Solver for Auto {
             walk = w;
             util = u;
         }
+        let mut from_spread = vec![(spread.clone(), spread_u)];
         if spread != greedy_walk && !run.should_stop() {
             let ls = LocalSearch::new(self.seed ^ 0x5eed_5eed);
-            let (w, u, n) = ls.improve_counted(p, run, spread.clone(), spread_u)?;
+            let (w, u, n) = ls.improve_counted(p, run, spread, spread_u)?;
             used += n;
-            for (w, u) in [(w, u), (spread, spread_u)] {
-                if better((&w, u), (&walk, util)) {
-                    walk = w;
-                    util = u;
-                }
+            from_spread.push((w, u));
+        }
+        // The spread walk competes even when the time is up (a greedy walk cut short
+        // by the limit is a stub near the start).
+        for (w, u) in from_spread {
+            if better((&w, u), (&walk, util)) {
+                walk = w;
+                util = u;
             }
         }
         report(0.2, util, "local search");

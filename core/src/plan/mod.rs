@@ -56,7 +56,6 @@ pub use run::{Control, NoObserver, Observer, Progress, Run};
 /// Feasibility tolerance of SPEC section 3: a walk fits when `C(P) <= B + BUDGET_EPS`.
 pub const BUDGET_EPS: f64 = 1e-9;
 
-
 /// A planning algorithm.
 pub trait Solver {
     /// Which algorithm this is.

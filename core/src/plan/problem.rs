@@ -3,7 +3,6 @@
 
 use std::sync::Arc;
 
-
 use crate::building::Building;
 use crate::gp::Kernel;
 use crate::samples::SurveyorModel;

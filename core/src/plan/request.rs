@@ -10,7 +10,6 @@ use crate::gp::Kernel;
 use crate::samples::SurveyorModel;
 use crate::{Error, Result};
 
-
 /// The planning algorithms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]

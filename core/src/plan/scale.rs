@@ -212,7 +212,19 @@ pub fn best_construction(p: &Problem, run: &Run, radii_ell: &[f64]) -> Result<(V
     let built: Vec<(Vec<usize>, Result<f64>)> = radii_ell
         .par_iter()
         .map(|&r| {
-            let w = for_surveyor(p, leg(p, &Leg { radius: r * ell, ..base }, &[], None, run));
+            let w = for_surveyor(
+                p,
+                leg(
+                    p,
+                    &Leg {
+                        radius: r * ell,
+                        ..base
+                    },
+                    &[],
+                    None,
+                    run,
+                ),
+            );
             let u = p.utility(&w);
             (w, u)
         })
@@ -222,7 +234,10 @@ pub fn best_construction(p: &Problem, run: &Run, radii_ell: &[f64]) -> Result<(V
         let u = u?;
         p.offer(run, &w, u);
         let s = penalised(p, &w, u);
-        if best.as_ref().is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs))) {
+        if best
+            .as_ref()
+            .is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs)))
+        {
             best = Some((w, u, s));
         }
     }

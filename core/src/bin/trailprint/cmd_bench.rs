@@ -21,7 +21,10 @@ pub struct Args {
     #[arg(long = "case", required = true)]
     cases: Vec<String>,
     /// Algorithms to run, comma-separated (default: all, the `coverage` baseline too).
-    #[arg(long, default_value = "greedy,genetic,recursive-greedy,ero,exact,auto,coverage")]
+    #[arg(
+        long,
+        default_value = "greedy,genetic,recursive-greedy,ero,exact,auto,coverage"
+    )]
     algorithms: String,
     /// Seeds, comma-separated (deterministic algorithms run once with the first).
     #[arg(long, default_value = "1,2,3")]
