@@ -179,6 +179,10 @@ unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, logdet_from: usiz
 /// keep the single pass, so their results are bit for bit those of decision 0002.
 const CHUNK_FROM: usize = 1024;
 
+/// Depth chunk of one tile's update when its rows go in groups (`Lanes::ROWS_AT_ONCE`):
+/// 128 rows of a 16-column strip are 16 KiB, half of a typical L1 data cache.
+const TILE_DEPTH: usize = 128;
+
 /// Depth chunk of large factorisations, rows.
 const KC: usize = 256;
 
@@ -186,7 +190,7 @@ const KC: usize = 256;
 const PANEL: usize = 64;
 
 /// Column strip of the panel update: a `KC x STRIP` block is 512 KiB.
-const STRIP: usize = 256;
+const STRIP: usize = 128;
 
 /// Updates the rows `panel0..panel0 + PANEL` (those below `n`), columns from each block
 /// row's diagonal to the end, by all rows above `panel0`: `C -= U[..panel0, rows]^T
@@ -281,6 +285,12 @@ trait Lanes: Copy {
     /// Whether a tile of two vectors per row (16 columns) keeps its accumulators in
     /// registers; if not, the driver updates 16 columns as two tiles of 8.
     const PAIRS: bool;
+    /// Rows of the tile updated together in the depth loop. Eight rows of eight lanes
+    /// are sixteen 256-bit accumulators (or thirty-two 128-bit NEON ones), which with the
+    /// row loaded and the broadcast leaves too few registers on AVX2 and NEON, so
+    /// the compiler spills accumulators inside the loop. Four rows at a time keep
+    /// everything in registers (the row of `U` is then read twice, from L1).
+    const ROWS_AT_ONCE: usize;
     unsafe fn load(p: *const f64) -> Self;
     unsafe fn store(self, p: *mut f64);
     unsafe fn splat(x: f64) -> Self;
@@ -297,6 +307,7 @@ struct Plain<const FMA: bool>([f64; 8]);
 impl<const FMA: bool> Lanes for Plain<FMA> {
     // 2 x 8 x 8 accumulators would not fit in NEON's or AVX2's registers.
     const PAIRS: bool = false;
+    const ROWS_AT_ONCE: usize = 4;
 
     #[inline(always)]
     unsafe fn load(p: *const f64) -> Self {
@@ -343,6 +354,7 @@ mod x86 {
     // and it into the AVX-512 driver (`factor_avx512`), which has the same features.
     impl Lanes for __m512d {
         const PAIRS: bool = true;
+        const ROWS_AT_ONCE: usize = 8;
 
         #[inline]
         #[target_feature(enable = "avx512f")]
@@ -409,18 +421,32 @@ unsafe fn tile<L: Lanes, const NV: usize>(
                 *x = L::load(a.add((k0 + r) * ld + j0 + 8 * v));
             }
         }
-        for p in p0..p1 {
-            let row = a.add(p * ld);
-            let mut b = [zero; NV];
-            for (v, x) in b.iter_mut().enumerate() {
-                *x = L::load(row.add(j0 + 8 * v));
-            }
-            for (r, accr) in acc.iter_mut().enumerate() {
-                let s = L::splat(*row.add(k0 + r));
-                for v in 0..NV {
-                    accr[v] = L::fnmadd(s, b[v], accr[v]);
+        // Row groups in turn (one group of eight on AVX-512, two of four elsewhere: see
+        // `Lanes::ROWS_AT_ONCE`), over the depth in chunks of `TILE_DEPTH` rows so that
+        // the second group reads the chunk's columns from L1. Each accumulator still
+        // sees the same sums in the same order, so the results are those of one pass.
+        let mut c0 = p0;
+        while c0 < p1 {
+            let c1 = (c0 + TILE_DEPTH).min(p1);
+            // Constant bounds throughout, so that the loops unroll and every accumulator
+            // is a register.
+            for g in 0..MR / L::ROWS_AT_ONCE {
+                let g0 = g * L::ROWS_AT_ONCE;
+                for p in c0..c1 {
+                    let row = a.add(p * ld);
+                    let mut b = [zero; NV];
+                    for (v, x) in b.iter_mut().enumerate() {
+                        *x = L::load(row.add(j0 + 8 * v));
+                    }
+                    for r in g0..g0 + L::ROWS_AT_ONCE {
+                        let s = L::splat(*row.add(k0 + r));
+                        for v in 0..NV {
+                            acc[r][v] = L::fnmadd(s, b[v], acc[r][v]);
+                        }
+                    }
                 }
             }
+            c0 = c1;
         }
         if let Some(inv) = solve {
             for r in 0..MR {
