@@ -9,6 +9,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use petgraph::graph::{NodeIndex, UnGraph};
+use petgraph::visit::EdgeRef;
 use serde::{Deserialize, Serialize};
 
 use crate::gp::{Kernel, Point};
@@ -360,7 +361,9 @@ pub struct Building {
     pub floors: Vec<Floor>,
     pub vertices: Vec<Vertex>,
     pub edges: Vec<Edge>,
-    /// Node weight: vertex index; edge weight: edge index into `edges`.
+    /// The graph for graph algorithms (node index = vertex index; node weight: vertex index;
+    /// edge weight: edge index into `edges`). Validation finds the connected components on
+    /// it; shortest paths have their own search (`plan::metric`), see decision 0004.
     pub graph: UnGraph<usize, usize>,
     pub pilot: Vec<Fingerprint>,
     pub test_points: Vec<Fingerprint>,
@@ -598,7 +601,7 @@ impl Building {
         }
 
         // Connectivity: name every component's size and one vertex of it.
-        let comps = components(&adjacency);
+        let comps = components(&graph);
         if comps.len() > 1 {
             let mut desc: Vec<String> = comps
                 .iter()
@@ -1022,31 +1025,22 @@ fn validate_outline(
     Ok(())
 }
 
-/// Connected components as lists of vertex indices, each list sorted, largest first.
-fn components(adjacency: &[Vec<(usize, usize)>]) -> Vec<Vec<usize>> {
-    let n = adjacency.len();
-    let mut comp = vec![usize::MAX; n];
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    for s in 0..n {
-        if comp[s] != usize::MAX {
-            continue;
-        }
-        let c = out.len();
-        let mut stack = vec![s];
-        comp[s] = c;
-        let mut members = Vec::new();
-        while let Some(v) = stack.pop() {
-            members.push(v);
-            for &(w, _) in &adjacency[v] {
-                if comp[w] == usize::MAX {
-                    comp[w] = c;
-                    stack.push(w);
-                }
-            }
-        }
-        members.sort_unstable();
-        out.push(members);
+/// Connected components as lists of vertex indices, each list sorted, largest first (ties:
+/// the component with the lower first vertex first, so messages are deterministic).
+///
+/// petgraph's union-find over the graph's edges: no recursion and no stack proportional to
+/// the graph, so a 20,000-vertex corridor is as safe as a small floor.
+fn components(graph: &UnGraph<usize, usize>) -> Vec<Vec<usize>> {
+    let mut sets = petgraph::unionfind::UnionFind::<usize>::new(graph.node_count());
+    for e in graph.edge_references() {
+        sets.union(e.source().index(), e.target().index());
     }
+    let mut by_root: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (v, root) in sets.into_labeling().into_iter().enumerate() {
+        by_root.entry(root).or_default().push(v);
+    }
+    // Vertices were pushed in increasing order, so every list is already sorted.
+    let mut out: Vec<Vec<usize>> = by_root.into_values().collect();
     out.sort_by(|a, b| b.len().cmp(&a.len()).then(a[0].cmp(&b[0])));
     out
 }

@@ -19,6 +19,7 @@ use crate::building::Building;
 use crate::eval::{MISSING_DBM, WorldModel};
 use crate::gp::{Kernel, Point};
 use crate::samples::{ARC_EPS, point_on_edge};
+use crate::synth::random::{normal, unit};
 use crate::synth::{AccessPoint, PropagationModel, PropagationParams};
 use crate::{Error, Result};
 
@@ -95,16 +96,6 @@ pub enum World {
     },
     /// A propagation model with access points placed at random vertices.
     Synthetic(PropagationModel),
-}
-
-fn unit<R: Rng>(rng: &mut R) -> f64 {
-    (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-}
-
-fn normal<R: Rng>(rng: &mut R) -> f64 {
-    let u1 = 1.0 - unit(rng);
-    let u2 = unit(rng);
-    libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(2.0 * std::f64::consts::PI * u2)
 }
 
 impl World {
