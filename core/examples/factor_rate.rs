@@ -29,7 +29,11 @@ fn main() {
         .skip(1)
         .map(|s| s.parse().expect("sizes are whole numbers"))
         .collect();
-    let sizes = if sizes.is_empty() { vec![400, 1000, 1600, 2600, 4000] } else { sizes };
+    let sizes = if sizes.is_empty() {
+        vec![400, 1000, 1600, 2600, 4000]
+    } else {
+        sizes
+    };
     for isa in Isa::supported() {
         for &n in &sizes {
             let layout = Layout::new(n);

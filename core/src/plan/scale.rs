@@ -33,8 +33,10 @@
 //! 3. **Exact comparison.** The best construction and the plain `coverage` walk are
 //!    evaluated exactly before the search (in parallel; that also measures what one
 //!    exact evaluation costs here), and the search stops early enough to leave the time
-//!    for the exact evaluation of its own walk. The best of them by exact `f_D` is
-//!    returned, so `auto` never returns less than the systematic walk it is judged
+//!    for the exact evaluation of its own walk. The walks the search offered on the way
+//!    (evaluated exactly) are finalists too: the surrogate may lead on to a walk that is
+//!    worse by `f_D`, and a plan never ends below what its progress has shown. The best
+//!    of them by exact `f_D` is returned, so `auto` never returns less than the systematic walk it is judged
 //!    against (for a person: less the 1% per reversal). The one exception is a time limit
 //!    shorter than a few exact evaluations on one thread (a 2,000 m robot walk on a
 //!    565-vertex building costs about 4 s): then only the finalists the limit affords are
@@ -354,6 +356,10 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     let limit = run.time_limit().unwrap_or(Duration::from_secs(3600));
     let exact_offers = t_exact < limit / 10;
     let mut offered_s = cur_s;
+    // The best walk of the search evaluated exactly so far (an offered walk): the
+    // surrogate may later prefer a walk that is worse by `f_D`, and the plan must never
+    // end below what it has already shown.
+    let mut offered: Option<(Vec<usize>, f64)> = None;
     report(0.1, format!("spread construction, {:.0} m", p.length(&cur)));
 
     // 2. Large-neighbourhood search until the time left is what the final exact
@@ -410,6 +416,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             let u = p.utility(&cur)?;
             p.offer(run, &cur, u);
             offered_s = cur_s;
+            if offered.as_ref().is_none_or(|(_, bu)| u > *bu) {
+                offered = Some((cur.clone(), u));
+            }
         }
         if stats.batches.is_multiple_of(8) {
             let frac = run.time_fraction().unwrap_or(stats.batches as f64 / 400.0);
@@ -431,14 +440,27 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // 3. Exact comparison of the finalists (only the search's walk when cancelled: the
     //    caller wants an answer now).
     if run.control_cancelled() {
-        let u = p.utility(&cur)?;
-        p.offer(run, &cur, u);
-        return Ok((Outcome::new(cur, u, Termination::Cancelled), stats));
+        let (walk, u) = match offered {
+            Some((w, u)) if w == cur => (w, u),
+            known => {
+                let u = p.utility(&cur)?;
+                p.offer(run, &cur, u);
+                match known {
+                    Some((w, ku)) if penalised(p, &w, ku) > penalised(p, &cur, u) => (w, ku),
+                    _ => (cur, u),
+                }
+            }
+        };
+        return Ok((Outcome::new(walk, u, Termination::Cancelled), stats));
     }
     // The search's walk is the one finalist not yet evaluated exactly; every finalist is
     // judged by its exact utility, penalised per reversal for a person.
     let mut finalists: Vec<(Vec<usize>, f64)> = fixed.into_iter().zip(fixed_u).collect();
-    if cur != first {
+    let cur_known = offered.as_ref().is_some_and(|(w, _)| *w == cur);
+    if let Some(o) = offered {
+        finalists.push(o);
+    }
+    if cur != first && !cur_known {
         let u = p.utility(&cur)?;
         p.offer(run, &cur, u);
         finalists.push((cur, u));
