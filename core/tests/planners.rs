@@ -185,7 +185,10 @@ fn genetic_operators_keep_walks_valid_and_within_budget() {
     let reported = best_lengths.0.lock().expect("lock").clone();
     assert!(!reported.is_empty(), "the GA reported no best walk");
     for l in reported {
-        assert!(p.fits(l), "reported best walk of {l} m over the {budget} m budget");
+        assert!(
+            p.fits(l),
+            "reported best walk of {l} m over the {budget} m budget"
+        );
     }
     assert!(!pop.is_empty());
     for (k, ind) in pop.iter().enumerate() {
@@ -337,7 +340,9 @@ fn every_algorithm_honours_its_time_limit() {
             SLACK_MS
         };
         if took > limit + Duration::from_millis(slack) {
-            late.push(format!("{alg}: {took:?}, allowed {slack} ms after the limit"));
+            late.push(format!(
+                "{alg}: {took:?}, allowed {slack} ms after the limit"
+            ));
         }
     }
     assert!(

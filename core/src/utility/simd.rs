@@ -783,7 +783,10 @@ pub(crate) mod tests {
         for (&x, &g) in xs.iter().zip(&got) {
             worst = worst.max((g - x.exp()).abs() / x.exp());
         }
-        assert!(worst < 1e-15, "{v:?}: exp_nonpos worst relative error {worst}");
+        assert!(
+            worst < 1e-15,
+            "{v:?}: exp_nonpos worst relative error {worst}"
+        );
         assert_eq!(got[0], 1.0, "{v:?}: exp(0)");
         worst
     }
