@@ -24,6 +24,22 @@ impl Observer for Recorder {
     }
 }
 
+/// Sends once, on the first progress report that carries a best walk.
+struct FirstBest(Mutex<Option<std::sync::mpsc::Sender<()>>>);
+
+impl Observer for FirstBest {
+    fn progress(&self, p: &Progress) {
+        if p.best_utility.is_some()
+            && let Some(tx) = self.0.lock().ok().and_then(|mut t| t.take())
+        {
+            let _ = tx.send(());
+        }
+    }
+}
+
+/// Cancelled 300 ms after its first report of a best walk (a fixed 300 ms from the start
+/// came before the incumbent on a loaded core, and the test then failed on the last
+/// assertion below).
 #[test]
 fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     let _serial = crate::serial();
@@ -31,16 +47,24 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
     req.algorithm = Algorithm::Exact; // hours without a limit
     let token = Arc::new(AtomicBool::new(false));
-    let control = Control::new().with_cancel_token(token.clone());
+    let (tx, rx) = std::sync::mpsc::channel();
+    let first = Arc::new(FirstBest(Mutex::new(Some(tx))));
+    let control = Control::new()
+        .with_cancel_token(token.clone())
+        .with_observer(first.clone());
     let t2 = token.clone();
     let h = std::thread::spawn(move || {
+        // An error: the plan ended without a report (the sender was dropped below).
+        let reported = rx.recv().is_ok();
         std::thread::sleep(Duration::from_millis(300));
         t2.store(true, Ordering::Relaxed);
-        Instant::now()
+        (reported, Instant::now())
     });
     let r = plan(b.clone(), &req, &control);
     let stopped = Instant::now();
-    let cancelled_at = h.join().expect("thread");
+    drop(first.0.lock().expect("lock").take());
+    let (reported, cancelled_at) = h.join().expect("thread");
+    assert!(reported, "the plan ended without reporting a best walk");
     // A cancelled plan returns its best walk so far, feasible, with its exact utility.
     let r = r.expect("a cancelled plan still returns its best walk");
     assert_eq!(r.termination, Termination::Cancelled);

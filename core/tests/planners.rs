@@ -5,8 +5,8 @@
 
 use crate::plan_common;
 
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
 use plan_common::{grid, instance, kernel, problem, request};
@@ -18,7 +18,8 @@ use trailprint::plan::genetic::{Genetic, crossover, mutate, random_walk};
 use trailprint::plan::greedy::Greedy;
 use trailprint::plan::local_search::LocalSearch;
 use trailprint::plan::{
-    Algorithm, Control, Params, PlanRequest, PlanResult, Problem, Run, Solver, Termination, plan,
+    Algorithm, Control, Observer, Params, PlanRequest, PlanResult, Problem, Progress, Run, Solver,
+    Termination, plan,
 };
 use trailprint::samples::SurveyorModel;
 use trailprint::utility::UtilityEngine;
@@ -121,7 +122,7 @@ fn genetic_operators_keep_walks_valid_and_within_budget() {
         assert_valid(&p, w, "random walk");
         assert!(p.fits(p.length(w)), "random walk over budget");
     }
-    let (mut crossed, mut mutated) = (0, 0);
+    let (mut crossed, mut mutated, mut over_budget) = (0, 0, 0);
     for (i, x) in walks.iter().enumerate() {
         for y in &walks[i + 1..] {
             if let Some((c1, c2)) = crossover(x, y, &mut rng) {
@@ -132,9 +133,16 @@ fn genetic_operators_keep_walks_valid_and_within_budget() {
                 let children = p.length(&c1) + p.length(&c2);
                 assert!((parents - children).abs() < 1e-9, "{parents} vs {children}");
                 assert_eq!(c1.len() + c2.len(), x.len() + y.len());
+                over_budget += [&c1, &c2].iter().filter(|c| !p.fits(p.length(c))).count();
             }
         }
     }
+    // Crossing walks that fill the budget often gives a child over it (the other is then
+    // shorter): the GA must drop those, which the whole-GA check below relies on.
+    assert!(
+        over_budget > 10,
+        "only {over_budget} children over budget: the filter below is not exercised"
+    );
     // Random walks fill the budget, so mutations of them (which lengthen a walk) must
     // mostly be refused; walks built for a budget 8 m smaller leave room for them.
     let tight = problem(&b, s, t, budget - 8.0);
@@ -162,16 +170,26 @@ fn genetic_operators_keep_walks_valid_and_within_budget() {
         "{crossed} crossovers, {mutated} mutations, {refused} refused"
     );
 
-    // The whole GA: every member of the final population is feasible with its exact
-    // utility, best first.
+    // The whole GA: every member of the final population (survivors of every
+    // generation's crossovers and mutations: an over-budget child, usually worth more,
+    // would survive selection) is feasible with its exact utility, best first; so is
+    // every walk the GA reports as its best along the way.
     let prm = Params {
-        population: 30,
-        generations: 4,
+        population: 40,
+        generations: 8,
         ..Params::default()
     };
-    let (pop, _) = Genetic::new(prm, 9)
-        .evolve(&p, &Run::new(Control::new(), None))
-        .expect("evolve");
+    let best_lengths = Arc::new(BestLengths::default());
+    let run = Run::new(Control::new().with_observer(best_lengths.clone()), None);
+    let (pop, _) = Genetic::new(prm, 9).evolve(&p, &run).expect("evolve");
+    let reported = best_lengths.0.lock().expect("lock").clone();
+    assert!(!reported.is_empty(), "the GA reported no best walk");
+    for l in reported {
+        assert!(
+            p.fits(l),
+            "reported best walk of {l} m over the {budget} m budget"
+        );
+    }
     assert!(!pop.is_empty());
     for (k, ind) in pop.iter().enumerate() {
         assert_valid(&p, &ind.walk, "individual");
@@ -187,6 +205,18 @@ fn genetic_operators_keep_walks_valid_and_within_budget() {
                 pop[k - 1].utility >= ind.utility,
                 "population not best first"
             );
+        }
+    }
+}
+
+/// Records the length of every best walk a progress report carries.
+#[derive(Default)]
+struct BestLengths(Mutex<Vec<f64>>);
+
+impl Observer for BestLengths {
+    fn progress(&self, p: &Progress) {
+        if let (Some(l), Ok(mut v)) = (p.best_length, self.0.lock()) {
+            v.push(l);
         }
     }
 }
@@ -274,12 +304,14 @@ fn every_algorithm_honours_a_cancel_before_it_starts() {
 
 /// With a 400 ms limit on a request that would take minutes, each algorithm stops soon
 /// after the limit with `time_limit` and its best feasible walk (coverage and greedy may
-/// also finish within it: then `completed`).
+/// also finish within it: then `completed`). "Soon" is SLACK_MS after the limit, issue
+/// 13's promise, for every algorithm but `exact`, which is allowed EXACT_SLACK_MS.
 #[test]
 fn every_algorithm_honours_its_time_limit() {
     let _serial = crate::serial();
     let b = instance("area-two.json");
     let limit = Duration::from_millis(400);
+    let mut late = Vec::new();
     for alg in Algorithm::ALL {
         let mut req = long_request(&b, alg);
         req.time_limit = Some(limit);
@@ -302,13 +334,150 @@ fn every_algorithm_honours_its_time_limit() {
             ),
             _ => assert_eq!(r.termination, Termination::TimeLimit, "{alg}"),
         }
-        if r.termination == Termination::TimeLimit {
-            assert!(
-                took < limit + Duration::from_millis(2500),
-                "{alg}: stopped {took:?} after a {limit:?} limit"
-            );
+        let slack = if alg == Algorithm::Exact {
+            EXACT_SLACK_MS
+        } else {
+            SLACK_MS
+        };
+        if took > limit + Duration::from_millis(slack) {
+            late.push(format!(
+                "{alg}: {took:?}, allowed {slack} ms after the limit"
+            ));
         }
     }
+    assert!(
+        late.is_empty(),
+        "stopped late on a {limit:?} limit: {late:?}"
+    );
+}
+
+/// How long after its time limit (or a cancel) a plan may return in these tests: issue
+/// 13's promise, the limit + max(10 %, 0.2 s), i.e. 200 ms on a 400 ms limit. Measured in
+/// the test profile on a shared core (2026-12-02): 10-20 ms after the limit, 0.5-17 ms
+/// after a cancel.
+const SLACK_MS: u64 = 200;
+
+/// `exact` on the same 400 ms limit returned after 741 ms (2026-12-02, test profile,
+/// shared core): 341 ms late, outside issue 13's promise. Not fixed here (this branch
+/// changes tests only); the likely cause is set-up after its incumbent that does not look
+/// at the deadline (`per_sample_bound` in `plan/exact.rs`). Allowed 600 ms until then.
+const EXACT_SLACK_MS: u64 = 600;
+
+/// Signals the first progress report (the search is under way) and keeps the best
+/// utility reported.
+struct Started {
+    tx: Mutex<Option<mpsc::Sender<()>>>,
+    best: Mutex<f64>,
+}
+
+impl Observer for Started {
+    fn progress(&self, p: &Progress) {
+        if let (Some(u), Ok(mut best)) = (p.best_utility, self.best.lock()) {
+            *best = best.max(u);
+        }
+        if let Some(tx) = self.tx.lock().ok().and_then(|mut t| t.take()) {
+            let _ = tx.send(());
+        }
+    }
+}
+
+/// Cancelled from another thread 200 ms after its first progress report (so in the
+/// middle of its search, which would go on for minutes), each algorithm returns within SLACK_MS with `cancelled` and
+/// a feasible walk with its exact utility, at least as good as the best it had reported.
+/// Greedy runs on a generated office floor (on Area Two it makes one round and is done);
+/// `coverage` is left out: it reports once, when done (a construction of milliseconds and
+/// one evaluation), and `every_algorithm_honours_a_cancel_before_it_starts` covers it.
+#[test]
+fn every_algorithm_stops_mid_run_on_a_cancel() {
+    let _serial = crate::serial();
+    let two = instance("area-two.json");
+    let office = office_floor();
+    let mut late = Vec::new();
+    for alg in Algorithm::ALL {
+        if alg == Algorithm::Coverage {
+            continue;
+        }
+        let (b, req) = if alg == Algorithm::Greedy {
+            let mut req = long_request(&office, alg);
+            req.start = office.vertices[0].id.clone();
+            req.end = req.start.clone();
+            req.budget = 0.6 * office.total_edge_length();
+            (office.clone(), req)
+        } else {
+            (two.clone(), long_request(&two, alg))
+        };
+        let mut req = req;
+        // Searches of minutes whose first report comes within a few seconds (the paper's
+        // population for genetic, depth 2 for recursive greedy), and a limit none reaches
+        // (auto's default is 2 s).
+        req.params.population = 200;
+        req.params.depth = 2;
+        req.time_limit = Some(Duration::from_secs(600));
+        let (tx, rx) = mpsc::channel();
+        let token = Arc::new(AtomicBool::new(false));
+        let started = Arc::new(Started {
+            tx: Mutex::new(Some(tx)),
+            best: Mutex::new(f64::NEG_INFINITY),
+        });
+        let control = Control::new()
+            .with_cancel_token(token.clone())
+            .with_observer(started.clone());
+        let canceller = std::thread::spawn(move || {
+            rx.recv().ok()?;
+            std::thread::sleep(Duration::from_millis(200));
+            token.store(true, Ordering::SeqCst);
+            Some(Instant::now())
+        });
+        let t = Instant::now();
+        let r = plan(b.clone(), &req, &control).expect("a cancelled plan still answers");
+        let stopped = Instant::now();
+        // No report before the plan ended: dropping the sender ends the canceller.
+        drop(started.tx.lock().expect("lock").take());
+        let cancelled_at = canceller
+            .join()
+            .expect("canceller")
+            .unwrap_or_else(|| panic!("{alg}: finished in {:?} without a report", t.elapsed()));
+        assert_eq!(
+            r.termination,
+            Termination::Cancelled,
+            "{alg}: finished in {:?}, before the cancel",
+            t.elapsed()
+        );
+        assert_sound(&b, &req, &r, alg.name());
+        let reported = *started.best.lock().expect("lock");
+        assert!(
+            r.utility_nats >= reported - 1e-9 * reported.abs().max(1.0),
+            "{alg}: returned {} nats after reporting a best of {reported}",
+            r.utility_nats
+        );
+        let lag = stopped.saturating_duration_since(cancelled_at);
+        println!(
+            "{alg}: cancelled after {:?}, returned {lag:?} later, {:.3} nats",
+            cancelled_at - t,
+            r.utility_nats
+        );
+        if lag > Duration::from_millis(SLACK_MS) {
+            late.push(format!("{alg}: {lag:?}"));
+        }
+    }
+    assert!(
+        late.is_empty(),
+        "returned more than {SLACK_MS} ms after the cancel: {late:?}"
+    );
+}
+
+/// A generated office floor (125 vertices, 402 m of edges) for a greedy that takes many
+/// rounds.
+fn office_floor() -> Arc<Building> {
+    let params = trailprint::synth::SynthParams {
+        name: "office".into(),
+        rooms_per_side: 4,
+        corridor_length_m: 40.0,
+        room_depth_m: 8.0,
+        ..trailprint::synth::SynthParams::default()
+    };
+    let synth = trailprint::synth::generate(&params).expect("generate");
+    Arc::new(Building::from_file(synth.file, "office").expect("valid"))
 }
 
 /// Local search (a stage of `auto`, not an algorithm of its own) stops on a cancel with
@@ -342,7 +511,9 @@ fn local_search_honours_cancel_and_deadline() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 4, ..ProptestConfig::default() })]
+    // 16 cases of seven plans each, with short limits (most plans finish well within
+    // them; exact and auto use them up): about 20 s in the test profile.
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
 
     /// Random irregular grids of 30 to 56 vertices, random end points and budgets: every
     /// algorithm's walk is sound (start, end, real edges, budget, reported utility equal
@@ -360,7 +531,7 @@ proptest! {
         for alg in Algorithm::ALL {
             let mut req = request(&b, s, t, budget, alg);
             req.seed = seed;
-            req.time_limit = Some(Duration::from_millis(if alg == Algorithm::Auto { 1000 } else { 1500 }));
+            req.time_limit = Some(Duration::from_millis(if alg == Algorithm::Auto { 300 } else { 600 }));
             let r = plan(b.clone(), &req, &Control::new()).expect("plan");
             assert_sound(&b, &req, &r, alg.name());
         }

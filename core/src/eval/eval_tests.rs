@@ -240,8 +240,13 @@ fn synthetic_world_model_works_without_a_dense_survey() {
     assert_eq!(ev.access_points().len(), 10);
     let samples: Vec<Point> = s.file.dense_survey.iter().map(Fingerprint::point).collect();
     let r = ev.evaluate(&samples, 1).expect("evaluate");
-    eprintln!("synthetic world model: mean {:.2} m", r.mean_error_m);
-    assert!(r.mean_error_m < 4.0, "{}", r.mean_error_m);
+    // Recorded 0.61 m (2026-12-02); the evaluation is a function of the seed, so a change
+    // beyond rounding means the synthetic world model or the localizer changed.
+    assert!(
+        (r.mean_error_m - 0.61).abs() < 0.02,
+        "mean error {} m, recorded 0.61 m",
+        r.mean_error_m
+    );
 }
 
 #[test]
@@ -315,15 +320,18 @@ fn both_localizers_locate_a_dense_walk_on_area_two() {
         .expect("knn");
     assert_eq!(gp, ev.evaluate(&pts, 1).expect("default"));
     assert_eq!(knn.errors_m.len(), b.test_points.len());
-    eprintln!(
-        "area-two dense walk: gp {:.2} m, knn {:.2} m",
-        gp.mean_error_m, knn.mean_error_m
-    );
-    // Both are metre-level on a dense map of a 63 m corridor; they are different methods.
-    assert!(
-        gp.mean_error_m < 6.0 && knn.mean_error_m < 6.0,
-        "{gp:?} {knn:?}"
-    );
+    // Recorded (2026-12-02): gp 0.56 m, knn 0.64 m (docs/results.md: 0.57 m and 0.63 m
+    // over five seeds). A function of the seed: a change beyond rounding means a changed
+    // localizer or world model.
+    for (what, got, recorded) in [
+        ("gp", gp.mean_error_m, 0.56),
+        ("knn", knn.mean_error_m, 0.64),
+    ] {
+        assert!(
+            (got - recorded).abs() < 0.02,
+            "{what}: mean error {got} m, recorded {recorded} m"
+        );
+    }
     assert_ne!(gp.errors_m, knn.errors_m);
 }
 

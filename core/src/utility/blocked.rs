@@ -288,9 +288,9 @@ pub fn syrk_upper_sub<const FMA: bool>(s: &mut [f64], n: usize, r: &[f64], rows:
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::utility::simd::{on_variant, test_variants};
+    use crate::utility::simd::{Isa, on_variant};
 
     fn spd(n: usize) -> Vec<f64> {
         let mut a = vec![0.0; n * n];
@@ -303,92 +303,77 @@ mod tests {
         a
     }
 
-    #[test]
-    fn blocked_cholesky_matches_nalgebra_for_awkward_sizes() {
-        println!(
-            "blocked kernels tested on (isa, fma): {:?}",
-            test_variants()
-        );
+    /// The blocked Cholesky factor, its log-determinant and the triangular solve against
+    /// nalgebra at sizes around the block width; the rank update against the Gram matrix
+    /// written out; a matrix that is not positive definite reported as such.
+    pub(crate) fn check(isa: (Isa, bool)) {
         for n in [1, 2, 7, 8, 9, 17, 40] {
             let a = spd(n);
             let m = nalgebra::DMatrix::from_row_slice(n, n, &a);
             let chol = m.clone().cholesky().expect("pd");
             let l = chol.l();
-            for isa in test_variants() {
-                let mut u = a.clone();
-                let ld = on_variant(
-                    isa,
-                    &mut u,
-                    |u| cholesky_upper::<false>(u, n),
-                    |u| cholesky_upper::<true>(u, n),
-                )
-                .expect("pd");
-                assert!(
-                    (ld - chol.ln_determinant()).abs() < 1e-10 * ld.abs().max(1.0),
-                    "{isa:?} n={n}"
-                );
-                for i in 0..n {
-                    for j in i..n {
-                        assert!(
-                            (u[i * n + j] - l[(j, i)]).abs() < 1e-12,
-                            "{isa:?} n={n} ({i},{j})"
-                        );
-                    }
-                }
-                // Solve U^T X = B against nalgebra.
-                let w = 3;
-                let b: Vec<f64> = (0..n * w).map(|i| (i as f64 * 0.3).sin()).collect();
-                let mut x = b.clone();
-                on_variant(
-                    isa,
-                    &mut x,
-                    |x| solve_upper_transposed::<false>(&u, n, x, w),
-                    |x| solve_upper_transposed::<true>(&u, n, x, w),
-                );
-                let bm = nalgebra::DMatrix::from_row_slice(n, w, &b);
-                let xm = l.solve_lower_triangular(&bm).expect("solve");
-                for i in 0..n {
-                    for c in 0..w {
-                        assert!((x[i * w + c] - xm[(i, c)]).abs() < 1e-11, "{isa:?} n={n}");
-                    }
+            let mut u = a.clone();
+            let ld = on_variant(
+                isa,
+                &mut u,
+                |u| cholesky_upper::<false>(u, n),
+                |u| cholesky_upper::<true>(u, n),
+            )
+            .expect("pd");
+            assert!(
+                (ld - chol.ln_determinant()).abs() < 1e-10 * ld.abs().max(1.0),
+                "{isa:?} n={n}"
+            );
+            for i in 0..n {
+                for j in i..n {
+                    assert!(
+                        (u[i * n + j] - l[(j, i)]).abs() < 1e-12,
+                        "{isa:?} n={n} ({i},{j})"
+                    );
                 }
             }
-        }
-    }
-
-    #[test]
-    fn syrk_subtracts_gram_matrix() {
-        let n = 11;
-        let rows = 13;
-        let r: Vec<f64> = (0..rows * n).map(|i| (i as f64 * 0.7).cos()).collect();
-        for isa in test_variants() {
-            let mut s = vec![0.0; n * n];
+            // Solve U^T X = B against nalgebra.
+            let w = 3;
+            let b: Vec<f64> = (0..n * w).map(|i| (i as f64 * 0.3).sin()).collect();
+            let mut x = b.clone();
             on_variant(
                 isa,
-                &mut s,
-                |s| syrk_upper_sub::<false>(s, n, &r, rows),
-                |s| syrk_upper_sub::<true>(s, n, &r, rows),
+                &mut x,
+                |x| solve_upper_transposed::<false>(&u, n, x, w),
+                |x| solve_upper_transposed::<true>(&u, n, x, w),
             );
-            for a in 0..n {
-                for b in a..n {
-                    let g: f64 = (0..rows).map(|i| r[i * n + a] * r[i * n + b]).sum();
-                    assert!((s[a * n + b] + g).abs() < 1e-12, "{isa:?} ({a},{b})");
+            let bm = nalgebra::DMatrix::from_row_slice(n, w, &b);
+            let xm = l.solve_lower_triangular(&bm).expect("solve");
+            for i in 0..n {
+                for c in 0..w {
+                    assert!((x[i * w + c] - xm[(i, c)]).abs() < 1e-11, "{isa:?} n={n}");
                 }
             }
         }
-    }
 
-    #[test]
-    fn not_positive_definite_is_reported() {
-        for isa in test_variants() {
-            let mut a = vec![1.0, 2.0, 2.0, 1.0];
-            let r = on_variant(
-                isa,
-                &mut a,
-                |a| cholesky_upper::<false>(a, 2),
-                |a| cholesky_upper::<true>(a, 2),
-            );
-            assert!(r.is_none(), "{isa:?}");
+        let (n, rows) = (11, 13);
+        let r: Vec<f64> = (0..rows * n).map(|i| (i as f64 * 0.7).cos()).collect();
+        let mut s = vec![0.0; n * n];
+        on_variant(
+            isa,
+            &mut s,
+            |s| syrk_upper_sub::<false>(s, n, &r, rows),
+            |s| syrk_upper_sub::<true>(s, n, &r, rows),
+        );
+        for a in 0..n {
+            for b in a..n {
+                let g: f64 = (0..rows).map(|i| r[i * n + a] * r[i * n + b]).sum();
+                assert!((s[a * n + b] + g).abs() < 1e-12, "{isa:?} syrk ({a},{b})");
+            }
         }
+
+        let mut a = vec![1.0, 2.0, 2.0, 1.0];
+        let r = on_variant(
+            isa,
+            &mut a,
+            |a| cholesky_upper::<false>(a, 2),
+            |a| cholesky_upper::<true>(a, 2),
+        );
+        assert!(r.is_none(), "{isa:?}: indefinite matrix not reported");
     }
 }

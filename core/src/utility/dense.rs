@@ -471,7 +471,7 @@ unsafe fn tile<L: Lanes, const NV: usize>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A symmetric positive definite test matrix in the dense layout (and as nalgebra).
@@ -500,7 +500,9 @@ mod tests {
         full - head.cholesky().expect("pd").ln_determinant()
     }
 
-    fn check(isa: Isa) {
+    /// The dense factor's log-determinant (of the Schur complement from row `from`) and
+    /// the factor itself against nalgebra.
+    pub(crate) fn check(isa: Isa) {
         // 1,300 rows: beyond CHUNK_FROM, so the depth-chunked pass (several chunks and a
         // ragged last one) is checked too.
         for n in [1usize, 2, 7, 8, 9, 15, 16, 17, 23, 24, 25, 40, 71, 1300] {
@@ -531,18 +533,20 @@ mod tests {
         }
     }
 
-    #[test]
-    fn factor_matches_nalgebra_on_every_isa() {
-        println!("dense factor tested on: {:?}", Isa::supported());
-        for isa in Isa::supported() {
-            check(isa);
-        }
+    /// A matrix that is not positive definite is reported, not factored.
+    pub(crate) fn check_indefinite(isa: Isa) {
+        let layout = Layout::new(3);
+        let mut a = vec![0.0; layout.len()];
+        a[0] = 1.0;
+        a[1] = 2.0;
+        a[layout.ld + 1] = 1.0;
+        a[2 * layout.ld + 2] = 1.0;
+        assert!(factor(isa, &mut a, layout, 0).is_none(), "{isa:?}");
     }
 
     /// The portable driver with the other `FMA` than this target's `Generic` uses: on
     /// x86-64 the fused build aarch64 runs (`mul_add` is a libm call here, slow but exact).
-    #[test]
-    fn portable_factor_with_the_other_fma_matches_nalgebra() {
+    pub(crate) fn check_portable_with_the_other_fma() {
         const OTHER: bool = !super::super::simd::GENERIC_FMA;
         for n in [1usize, 7, 8, 9, 17, 40, 71] {
             for from in [0, n / 3, n - 1] {
@@ -556,19 +560,6 @@ mod tests {
                     "n={n} from={from}"
                 );
             }
-        }
-    }
-
-    #[test]
-    fn indefinite_matrix_is_reported_for_every_isa() {
-        for isa in Isa::supported() {
-            let layout = Layout::new(3);
-            let mut a = vec![0.0; layout.len()];
-            a[0] = 1.0;
-            a[1] = 2.0;
-            a[layout.ld + 1] = 1.0;
-            a[2 * layout.ld + 2] = 1.0;
-            assert!(factor(isa, &mut a, layout, 0).is_none(), "{isa:?}");
         }
     }
 }

@@ -12,4 +12,7 @@ pub mod dense;
 pub mod engine;
 pub mod simd;
 
+#[cfg(test)]
+mod isa_tests;
+
 pub use engine::{Mark, UtilityEngine, WalkState};
