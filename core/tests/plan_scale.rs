@@ -161,15 +161,20 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
     }
 }
 
+/// Records the best walk's length and utility of every progress report that carries them.
 #[derive(Default)]
-struct Last {
+struct Bests {
     lengths: Mutex<Vec<f64>>,
+    utilities: Mutex<Vec<f64>>,
 }
 
-impl Observer for Last {
+impl Observer for Bests {
     fn progress(&self, p: &Progress) {
         if let (Some(l), Ok(mut v)) = (p.best_length, self.lengths.lock()) {
             v.push(l);
+        }
+        if let (Some(u), Ok(mut v)) = (p.best_utility, self.utilities.lock()) {
+            v.push(u);
         }
     }
 }
@@ -182,7 +187,7 @@ fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
     let budget = 0.5 * b.total_edge_length();
     let mut req = PlanRequest::new(&start, &start, budget, k);
     req.time_limit = Some(Duration::from_secs(30));
-    let obs = Arc::new(Last::default());
+    let obs = Arc::new(Bests::default());
     let token = Arc::new(AtomicBool::new(false));
     let control = Control::new()
         .with_observer(obs.clone())
@@ -268,20 +273,6 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let per_100m = 100.0 * reversals(&p, &r.walk_indices) as f64 / r.length_m;
     // Measured: 0 to 0.5 per 100 m whatever the time the search gets (0.1 s to 4 s).
     assert!(per_100m <= 1.0, "{per_100m} reversals per 100 m");
-}
-
-/// Records the best utility of every progress report.
-#[derive(Default)]
-struct Bests {
-    utilities: Mutex<Vec<f64>>,
-}
-
-impl Observer for Bests {
-    fn progress(&self, p: &Progress) {
-        if let (Some(u), Ok(mut v)) = (p.best_utility, self.utilities.lock()) {
-            v.push(u);
-        }
-    }
 }
 
 /// A progress bar's "best so far" is a promise: the plan never ends below a walk it has
