@@ -191,6 +191,14 @@ fun SurveyScreen(
             Button(onClick = m::finish) { Text("Finish") }
         }
     }
+    s.unreadableRecord?.let { msg ->
+        AlertDialog(
+            onDismissRequest = {},
+            confirmButton = { TextButton(onClick = m::forgetRecord) { Text("Forget") } },
+            title = { Text("The last survey cannot be carried on") },
+            text = { Text(dev.trailprint.survey.RecordCheck.Unreadable(msg).prompt) },
+        )
+    }
     s.error?.let { msg ->
         AlertDialog(
             onDismissRequest = m::dismissError,
