@@ -5,9 +5,9 @@ use trailprint::plan::Control;
 use trailprint::store::{self as core_store, ExportOptions, StoreTeamRequest};
 use trailprint::team::SurveyorTask;
 
-use crate::{Result, TrailprintError};
 use crate::plan::{PlanAlgorithm, core_settings};
 use crate::store::TrailprintStore;
+use crate::{Result, TrailprintError};
 
 /// One member of a team: where they start and end, and how far they may walk.
 #[derive(Debug, Clone, uniffi::Record)]
@@ -150,9 +150,9 @@ impl TrailprintStore {
             }
         }
         let find = |id: i64| {
-            building_of
-                .get(&id)
-                .ok_or_else(|| TrailprintError::NotFound(format!("session {id} is not in the store")))
+            building_of.get(&id).ok_or_else(|| {
+                TrailprintError::NotFound(format!("session {id} is not in the store"))
+            })
         };
         let (building, name) = find(first)?.clone();
         let mut sessions = Vec::with_capacity(session_ids.len());

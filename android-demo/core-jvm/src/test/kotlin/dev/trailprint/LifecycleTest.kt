@@ -251,8 +251,8 @@ class LifecycleTest {
         record.writeText(record.readText().take(30))
 
         // The app's launch sees it as a value, with the sentence above "Forget".
-        val check = ActiveSurveyFile(record).check()
-        assertTrue(check is RecordCheck.Unreadable, "$check")
+        val check = ActiveSurveyFile(record).check() as? RecordCheck.Unreadable
+            ?: throw AssertionError("a truncated record reads as ${ActiveSurveyFile(record).check()}")
         assertTrue("active.json" in check.prompt && "Forget" in check.prompt, check.prompt)
 
         // Every restart of the service (START_STICKY) reports it and runs nothing: no
