@@ -581,3 +581,54 @@ fn team_plan_keeps_its_walks_as_plans() {
         assert_eq!(serde_json::json!(p.record.walk), v["walks"][i]);
     }
 }
+
+/// `plan --start ID` with an id as a user types it, on the bundled buildings: the floor
+/// prefix of the generated ids left out (`c0` for `f0-c00`), leading zeros left out
+/// (`b5` for `b05`), a number past the end, a label instead of an id.
+#[test]
+fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let area_two = shared_instance("area-two.json");
+    let area_two = area_two.to_str().expect("utf-8");
+    for (building, typed, end, expect) in [
+        (DEMO, "c0", "f0-c15", "; did you mean \"f0-c00\"?"),
+        (DEMO, "C3", "f0-c15", "; did you mean \"f0-c03\"?"),
+        (DEMO, "f0-c0", "f0-c15", "; did you mean \"f0-c00\"?"),
+        (DEMO, "c16", "f0-c15", "; did you mean \"f0-c15\""),
+        (DEMO, "r2", "f0-c15", "; did you mean \"f0-r2-door\", "),
+        (DEMO, "Room 1", "f0-c15", "\"f0-r0-door\""),
+        (
+            DEMO,
+            "c99",
+            "f0-c15",
+            "; the 16 ids like it run from \"f0-c00\" to \"f0-c15\"",
+        ),
+        (area_two, "b5", "t29", "; did you mean \"b05\"?"),
+        (area_two, "t3", "t29", "; did you mean \"t03\"?"),
+    ] {
+        let e = run_err(
+            &db,
+            &[
+                "plan", "--building", building, "--start", typed, "--end", end, "--budget", "30",
+            ],
+        );
+        assert!(
+            e.contains(&format!("start: unknown vertex {typed:?}")) && e.contains(expect),
+            "{typed}: {e}"
+        );
+    }
+    // The end and a walk are answered the same way.
+    let e = run_err(
+        &db,
+        &[
+            "plan", "--building", DEMO, "--start", "f0-c00", "--end", "c15", "--budget", "30",
+        ],
+    );
+    assert!(
+        e.contains("end: unknown vertex \"c15\"") && e.contains("did you mean \"f0-c15\"?"),
+        "{e}"
+    );
+    let e = run_err(&db, &["utility", "--building", DEMO, "--walk", "c0,c1"]);
+    assert!(e.contains("did you mean \"f0-c00\"?"), "{e}");
+}
