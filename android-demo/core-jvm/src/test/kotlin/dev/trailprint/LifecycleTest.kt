@@ -281,7 +281,8 @@ class LifecycleTest {
         assertTrue(next.sessionId != active.sessionId)
         assertEquals(RecordCheck.Found(next), ActiveSurveyFile(record).check())
         now.addAndGet(1000)
-        p.lifecycle.abort("test over")
+        assertNotNull(p.lifecycle.abort("test over"))
+        Unit
     }
 
     @Test
