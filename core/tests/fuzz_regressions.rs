@@ -60,45 +60,13 @@ fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
 /// now replay to the live state.
 #[test]
 fn a_reading_of_minus_zero_dbm_replays_to_the_same_session() {
-    use std::sync::Arc;
-    use trailprint::Building;
-    use trailprint::gp::Kernel;
-    use trailprint::session::{
-        Event, MemoryLog, PlanData, Session, SessionLog, SessionOptions, Surveyor,
-    };
-    use trailprint::store::{ImportOptions as StoreImport, Store};
+    use trailprint::session::{Event, Session, Surveyor};
 
-    let building =
-        Building::from_json(&text("session-building.json"), "session-building.json").unwrap();
     let events: std::collections::BTreeMap<String, Vec<Event>> =
         serde_json::from_str(&text("session-minus-zero-dbm.json")).unwrap();
     for (who, surveyor) in [("human", Surveyor::human()), ("robot", Surveyor::robot())] {
         for in_store in [false, true] {
-            let (log, bid): (Arc<dyn SessionLog>, i64) = if in_store {
-                let store = Store::open_in_memory().unwrap();
-                let id = store
-                    .import_building(&building, None, &StoreImport::default())
-                    .unwrap()
-                    .id;
-                (Arc::new(store), id)
-            } else {
-                let log = Arc::new(MemoryLog::new());
-                let id = log.add_building(Arc::new(building.clone()));
-                (log, id)
-            };
-            let plan = PlanData::for_walk(
-                bid,
-                &["a", "b", "c", "d"],
-                40.0,
-                Kernel::new(20.0, 5.0, 2.0),
-                12.0,
-            );
-            let plan_id = log.save_plan(&plan).unwrap();
-            let options = SessionOptions {
-                auto_replan: false,
-                ..SessionOptions::default()
-            };
-            let mut s = Session::start(log.clone(), plan_id, surveyor, options).unwrap();
+            let (mut s, log, _) = fuzz_session(in_store, surveyor);
             for ev in &events[who] {
                 s.record(ev.clone()).unwrap();
             }
@@ -352,11 +320,11 @@ fn replay_session_fixture(name: &str) {
 }
 
 #[test]
-fn fuzz_crash_209ed65f_session() {
+fn session_seed_once_committed_as_crash_209ed65f_replays_cleanly() {
     replay_session_fixture("session-209ed65f.json");
 }
 
 #[test]
-fn fuzz_crash_32c3a55e_session() {
+fn session_seed_once_committed_as_crash_32c3a55e_replays_cleanly() {
     replay_session_fixture("session-32c3a55e.json");
 }
