@@ -15,4 +15,4 @@ pub mod simd;
 #[cfg(test)]
 mod isa_tests;
 
-pub use engine::{Mark, UtilityEngine, WalkState};
+pub use engine::{Mark, UtilityEngine, WalkState, merge_coincident};
