@@ -836,40 +836,50 @@ impl Building {
     fn did_you_mean(&self, id: &str) -> String {
         let near = self.similar_vertex_ids(id);
         let quoted: Vec<String> = near.iter().map(|v| format!("{v:?}")).collect();
-        match quoted.as_slice() {
-            [] => {
-                // Ids of the same letters ("c99" in a corridor "f0-c00" ... "f0-c15").
-                let want = IdShape::new(id);
-                let mut alike: Vec<(Vec<u64>, &str)> = self
-                    .vertices
-                    .iter()
-                    .filter_map(|v| {
-                        let have = IdShape::new(&v.id);
-                        (have.letters == want.letters).then(|| (have.numbers, v.id.as_str()))
-                    })
-                    .collect();
-                alike.sort();
-                match (alike.first(), alike.last()) {
-                    (Some(a), Some(b)) if alike.len() > 1 => format!(
-                        "; the {} ids like it run from {:?} to {:?} (`trailprint vertices` lists them all)",
-                        alike.len(),
-                        a.1,
-                        b.1
-                    ),
-                    (Some(a), _) => format!("; the one id like it is {:?}", a.1),
-                    _ => match (self.vertices.first(), self.vertices.last()) {
-                        (Some(a), Some(b)) if self.len() > 1 => format!(
-                            "; its {} vertex ids run from {:?} to {:?}",
-                            self.len(),
-                            a.id,
-                            b.id
-                        ),
-                        _ => String::new(),
-                    },
-                }
-            }
-            [one] => format!("; did you mean {one}?"),
-            [init @ .., last] => format!("; did you mean {} or {last}?", init.join(", ")),
+        // Ids of the same letters ("c99" in a corridor "f0-c00" ... "f0-c15"): their
+        // range, unless a suggestion is the id itself but for zeros or the floor prefix.
+        let want = IdShape::new(id);
+        let exact = near.iter().any(|v| IdShape::new(v).same_shape(&want));
+        let mut alike: Vec<(Vec<u64>, &str)> = self
+            .vertices
+            .iter()
+            .filter_map(|v| {
+                let have = IdShape::new(&v.id);
+                (have.letters == want.letters).then_some((have.numbers, v.id.as_str()))
+            })
+            .collect();
+        alike.sort();
+        let range = match (alike.first(), alike.last()) {
+            _ if exact => None,
+            (Some(a), Some(b)) if alike.len() > 1 => Some(format!(
+                "the {} ids like it run from {:?} to {:?} (`trailprint vertices` lists them all)",
+                alike.len(),
+                a.1,
+                b.1
+            )),
+            (Some(a), _) => Some(format!("the one id like it is {:?}", a.1)),
+            _ => None,
+        };
+        match (quoted.as_slice(), range) {
+            ([], Some(r)) => format!("; {r}"),
+            ([], None) => match (self.vertices.first(), self.vertices.last()) {
+                (Some(a), Some(b)) if self.len() > 1 => format!(
+                    "; its {} vertex ids run from {:?} to {:?}",
+                    self.len(),
+                    a.id,
+                    b.id
+                ),
+                _ => String::new(),
+            },
+            ([one], r) => format!(
+                "; did you mean {one}?{}",
+                r.map(|r| format!(" ({r})")).unwrap_or_default()
+            ),
+            ([init @ .., last], r) => format!(
+                "; did you mean {} or {last}?{}",
+                init.join(", "),
+                r.map(|r| format!(" ({r})")).unwrap_or_default()
+            ),
         }
     }
 

@@ -602,7 +602,7 @@ fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
             DEMO,
             "c99",
             "f0-c15",
-            "; the 16 ids like it run from \"f0-c00\" to \"f0-c15\"",
+            "; did you mean \"f0-c09\"? (the 16 ids like it run from \"f0-c00\" to \"f0-c15\"",
         ),
         (area_two, "b5", "t29", "; did you mean \"b05\"?"),
         (area_two, "t3", "t29", "; did you mean \"t03\"?"),
