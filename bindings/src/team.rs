@@ -5,9 +5,9 @@ use trailprint::plan::Control;
 use trailprint::store::{self as core_store, ExportOptions, StoreTeamRequest};
 use trailprint::team::SurveyorTask;
 
-use crate::Result;
 use crate::plan::{PlanAlgorithm, core_settings};
 use crate::store::TrailprintStore;
+use crate::{Result, TrailprintError};
 
 /// One member of a team: where they start and end, and how far they may walk.
 #[derive(Debug, Clone, uniffi::Record)]
@@ -125,10 +125,83 @@ impl TrailprintStore {
         )?)
     }
 
+    /// A bundle (JSON text) of exactly the sessions `session_ids` (say, the surveys a
+    /// surveyor picks from the finished ones), with the same provenance as
+    /// [`TrailprintStore::export_bundle`]. A bundle holds one building, so the sessions
+    /// must all be of one building; an empty list, an id not in the store or a session of
+    /// another building is an error naming it (the core would read an empty list as
+    /// "every session"). Ids given twice count once.
+    pub fn export_sessions_bundle(
+        &self,
+        session_ids: Vec<i64>,
+        device: Option<String>,
+        surveyor_name: Option<String>,
+    ) -> Result<String> {
+        let Some(&first) = session_ids.first() else {
+            return Err(TrailprintError::InvalidRequest(
+                "export_sessions_bundle: no session ids given".into(),
+            ));
+        };
+        // Where each session lives: the store lists sessions per building.
+        let mut building_of = std::collections::HashMap::new();
+        for b in self.inner.list_buildings()? {
+            for s in self.inner.list_sessions(b.id)? {
+                building_of.insert(s.id, (b.id, b.name.clone()));
+            }
+        }
+        let find = |id: i64| {
+            building_of.get(&id).ok_or_else(|| {
+                TrailprintError::NotFound(format!("session {id} is not in the store"))
+            })
+        };
+        let (building, name) = find(first)?.clone();
+        let mut sessions = Vec::with_capacity(session_ids.len());
+        for &id in &session_ids {
+            let (b, other) = find(id)?;
+            if *b != building {
+                return Err(TrailprintError::InvalidRequest(format!(
+                    "session {id} is of building \"{other}\", session {first} of \"{name}\": \
+                     a bundle holds the sessions of one building"
+                )));
+            }
+            if !sessions.contains(&id) {
+                sessions.push(id);
+            }
+        }
+        Ok(self.inner.export_bundle(
+            building,
+            &ExportOptions {
+                device,
+                surveyor_name,
+                sessions,
+            },
+        )?)
+    }
+
     /// Merges a bundle (JSON text; `origin` names it in errors). Importing the same bundle
     /// again changes nothing; a corrupt or truncated bundle, or one over the core's limit
     /// (`MAX_BUNDLE_BYTES`, 256 MiB), fails with `InvalidBuilding` and imports nothing.
     pub fn import_bundle(&self, json: String, origin: String) -> Result<BundleImportSummary> {
         Ok(self.inner.import_bundle(&json, &origin)?.into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sessions_bundle_refuses_an_empty_list_and_names_an_unknown_session() {
+        let store = TrailprintStore::open_in_memory().unwrap();
+        let empty = store.export_sessions_bundle(Vec::new(), None, None);
+        assert!(
+            matches!(&empty, Err(TrailprintError::InvalidRequest(m)) if m.contains("no session ids")),
+            "{empty:?}"
+        );
+        let unknown = store.export_sessions_bundle(vec![42], None, None);
+        assert!(
+            matches!(&unknown, Err(TrailprintError::NotFound(m)) if m.contains("session 42")),
+            "{unknown:?}"
+        );
     }
 }

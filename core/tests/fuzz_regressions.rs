@@ -60,45 +60,13 @@ fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
 /// now replay to the live state.
 #[test]
 fn a_reading_of_minus_zero_dbm_replays_to_the_same_session() {
-    use std::sync::Arc;
-    use trailprint::Building;
-    use trailprint::gp::Kernel;
-    use trailprint::session::{
-        Event, MemoryLog, PlanData, Session, SessionLog, SessionOptions, Surveyor,
-    };
-    use trailprint::store::{ImportOptions as StoreImport, Store};
+    use trailprint::session::{Event, Session, Surveyor};
 
-    let building =
-        Building::from_json(&text("session-building.json"), "session-building.json").unwrap();
     let events: std::collections::BTreeMap<String, Vec<Event>> =
         serde_json::from_str(&text("session-minus-zero-dbm.json")).unwrap();
     for (who, surveyor) in [("human", Surveyor::human()), ("robot", Surveyor::robot())] {
         for in_store in [false, true] {
-            let (log, bid): (Arc<dyn SessionLog>, i64) = if in_store {
-                let store = Store::open_in_memory().unwrap();
-                let id = store
-                    .import_building(&building, None, &StoreImport::default())
-                    .unwrap()
-                    .id;
-                (Arc::new(store), id)
-            } else {
-                let log = Arc::new(MemoryLog::new());
-                let id = log.add_building(Arc::new(building.clone()));
-                (log, id)
-            };
-            let plan = PlanData::for_walk(
-                bid,
-                &["a", "b", "c", "d"],
-                40.0,
-                Kernel::new(20.0, 5.0, 2.0),
-                12.0,
-            );
-            let plan_id = log.save_plan(&plan).unwrap();
-            let options = SessionOptions {
-                auto_replan: false,
-                ..SessionOptions::default()
-            };
-            let mut s = Session::start(log.clone(), plan_id, surveyor, options).unwrap();
+            let (mut s, log, _) = fuzz_session(in_store, surveyor);
             for ev in &events[who] {
                 s.record(ev.clone()).unwrap();
             }
@@ -111,4 +79,252 @@ fn a_reading_of_minus_zero_dbm_replays_to_the_same_session() {
             );
         }
     }
+}
+
+/// A session on the fuzz building (`session-building.json`, the building of the `session`
+/// target) with the walk `a b c d`, its log in memory or in an in-memory store (kept, so
+/// that a test can read its rows).
+fn fuzz_session(
+    in_store: bool,
+    surveyor: trailprint::session::Surveyor,
+) -> (
+    trailprint::session::Session,
+    std::sync::Arc<dyn trailprint::session::SessionLog>,
+    Option<std::sync::Arc<trailprint::store::Store>>,
+) {
+    use std::sync::Arc;
+    use trailprint::Building;
+    use trailprint::gp::Kernel;
+    use trailprint::session::{MemoryLog, PlanData, Session, SessionLog, SessionOptions};
+    use trailprint::store::{ImportOptions as StoreImport, Store};
+
+    let building =
+        Building::from_json(&text("session-building.json"), "session-building.json").unwrap();
+    let (log, bid, store): (Arc<dyn SessionLog>, i64, Option<Arc<Store>>) = if in_store {
+        let store = Arc::new(Store::open_in_memory().unwrap());
+        let id = store
+            .import_building(&building, None, &StoreImport::default())
+            .unwrap()
+            .id;
+        (store.clone(), id, Some(store))
+    } else {
+        let log = Arc::new(MemoryLog::new());
+        let id = log.add_building(Arc::new(building));
+        (log, id, None)
+    };
+    let plan = PlanData::for_walk(
+        bid,
+        &["a", "b", "c", "d"],
+        40.0,
+        Kernel::new(20.0, 5.0, 2.0),
+        12.0,
+    );
+    let plan_id = log.save_plan(&plan).unwrap();
+    let options = SessionOptions {
+        auto_replan: false,
+        ..SessionOptions::default()
+    };
+    let s = Session::start(log.clone(), plan_id, surveyor, options).unwrap();
+    (s, log, store)
+}
+
+/// Event times at the ends of `i64` (the `session` target sends `i64::MIN` and `i64::MAX`):
+/// a first event at `i64::MIN` was accepted, and the active time of any later event, `last
+/// - first`, overflowed (a panic with overflow checks, a negative time without). Times are
+/// now bounded by `MAX_EVENT_T_MS` (0 to early 2070): one outside is refused, naming the
+/// field and the bound, and changes neither the session nor its log; the bound itself is
+/// accepted, and the active time from 0 to it is exact.
+#[test]
+fn event_times_past_max_event_t_ms_are_refused_naming_the_field() {
+    use trailprint::session::{Event, MAX_EVENT_T_MS, Surveyor};
+
+    for in_store in [false, true] {
+        for (who, surveyor) in [("human", Surveyor::human()), ("robot", Surveyor::robot())] {
+            let (mut s, log, _) = fuzz_session(in_store, surveyor);
+            let ev = |t_ms: i64| {
+                if surveyor.is_human() {
+                    Event::Step { t_ms, steps: 1 }
+                } else {
+                    Event::Pose {
+                        t_ms,
+                        x: 1.0,
+                        y: 0.0,
+                        floor: 0,
+                    }
+                }
+            };
+            for t in [i64::MIN, -1, MAX_EVENT_T_MS + 1, i64::MAX] {
+                let before = s.digest();
+                let err = s
+                    .record(ev(t))
+                    .expect_err(&format!("{who}: t_ms {t} accepted"));
+                let msg = err.to_string();
+                for part in ["t_ms", &MAX_EVENT_T_MS.to_string(), &t.to_string()] {
+                    assert!(msg.contains(part), "{who}: {msg:?} should name {part:?}");
+                }
+                assert_eq!(
+                    s.digest(),
+                    before,
+                    "{who}: refused t_ms {t} changed the session"
+                );
+                assert!(
+                    log.events(s.id()).unwrap().is_empty(),
+                    "{who}: t_ms {t} logged"
+                );
+            }
+            s.record(ev(0)).unwrap();
+            s.record(ev(MAX_EVENT_T_MS)).unwrap();
+            assert_eq!(s.tracker().elapsed_ms(), MAX_EVENT_T_MS, "{who}");
+            let p = s.progress().unwrap();
+            assert!(p.elapsed_s.is_finite() && p.elapsed_s > 0.0, "{who}: {p:?}");
+            let err = s.record(ev(i64::MAX)).expect_err("past the bound");
+            assert!(err.to_string().contains("t_ms"), "{err}");
+            assert_eq!(log.events(s.id()).unwrap().len(), 2, "{who}");
+        }
+    }
+}
+
+/// The store is the other door for event times (a bundle's events go through it): an
+/// event outside 0 to `MAX_EVENT_T_MS` is refused naming `at_ms`, and the store is left
+/// with the events it had.
+#[test]
+fn the_store_refuses_event_times_past_max_event_t_ms() {
+    use trailprint::session::{MAX_EVENT_T_MS, Surveyor};
+    use trailprint::store::SessionEvent;
+
+    let (s, _, store) = fuzz_session(true, Surveyor::human());
+    let store = store.unwrap();
+    let id = s.id();
+    store
+        .append_event(id, MAX_EVENT_T_MS, &SessionEvent::Pause)
+        .unwrap();
+    for t in [i64::MIN, -1, MAX_EVENT_T_MS + 1, i64::MAX] {
+        let err = store
+            .append_event(id, t, &SessionEvent::Resume)
+            .expect_err(&format!("at_ms {t} accepted"));
+        let msg = err.to_string();
+        for part in ["at_ms", &MAX_EVENT_T_MS.to_string(), &t.to_string()] {
+            assert!(msg.contains(part), "{msg:?} should name {part:?}");
+        }
+    }
+    let events = store.list_events(id, 0).unwrap();
+    assert_eq!(events.len(), 1);
+    assert_eq!(events[0].at_ms, MAX_EVENT_T_MS);
+}
+
+/// Replays a `session` target input kept as JSON (the target's setup and its decoded ops:
+/// events, and `"replan"` for an explicit replan) with the target's checks: a refused event
+/// changes neither the session nor its log (nor the store's rows), an accepted one gets the
+/// next seq and leaves finite figures, and the log replays to the live state.
+fn replay_session_fixture(name: &str) {
+    use std::sync::Arc;
+    use trailprint::Building;
+    use trailprint::gp::Kernel;
+    use trailprint::session::{
+        Event, MemoryLog, PlanData, Session, SessionLog, SessionOptions, SessionStatus, Surveyor,
+    };
+    use trailprint::store::{ImportOptions as StoreImport, Store};
+
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Op {
+        Replan(String),
+        Event(Event),
+    }
+    #[derive(serde::Deserialize)]
+    struct Input {
+        log: String,
+        surveyor: String,
+        auto_replan: bool,
+        deviation_reserve: bool,
+        walk: Vec<String>,
+        ops: Vec<Op>,
+    }
+    let input: Input = serde_json::from_str(&text(name)).expect(name);
+    let building =
+        Building::from_json(&text("session-building.json"), "session-building.json").unwrap();
+    let (log, bid): (Arc<dyn SessionLog>, i64) = if input.log == "store" {
+        let store = Store::open_in_memory().unwrap();
+        let id = store
+            .import_building(&building, None, &StoreImport::default())
+            .unwrap()
+            .id;
+        (Arc::new(store), id)
+    } else {
+        let log = Arc::new(MemoryLog::new());
+        let id = log.add_building(Arc::new(building));
+        (log, id)
+    };
+    let surveyor = if input.surveyor == "human" {
+        Surveyor::human()
+    } else {
+        Surveyor::robot()
+    };
+    let walk: Vec<&str> = input.walk.iter().map(String::as_str).collect();
+    let plan = PlanData::for_walk(bid, &walk, 40.0, Kernel::new(20.0, 5.0, 2.0), 12.0);
+    let plan_id = log.save_plan(&plan).unwrap();
+    let options = SessionOptions {
+        auto_replan: input.auto_replan,
+        deviation_reserve: input.deviation_reserve,
+        ..SessionOptions::default()
+    };
+    let mut s = Session::start(log.clone(), plan_id, surveyor, options).unwrap();
+    let id = s.id();
+    for (i, op) in input.ops.into_iter().enumerate() {
+        let before = s.digest();
+        let before_len = log.events(id).unwrap().len();
+        let ended = matches!(s.status(), SessionStatus::Finished | SessionStatus::Aborted);
+        match op {
+            Op::Replan(_) => {
+                if s.replan().is_err() {
+                    assert_eq!(
+                        before,
+                        s.digest(),
+                        "op {i}: a failed replan changed the session"
+                    );
+                    assert_eq!(before_len, log.events(id).unwrap().len(), "op {i}");
+                }
+            }
+            Op::Event(ev) => match s.record(ev.clone()) {
+                Err(e) => {
+                    assert!(!e.to_string().is_empty());
+                    assert_eq!(
+                        before,
+                        s.digest(),
+                        "op {i}: refused {ev:?} changed the session"
+                    );
+                    assert_eq!(before_len, log.events(id).unwrap().len(), "op {i}: logged");
+                }
+                Ok(ack) => {
+                    assert!(!ended, "op {i}: {ev:?} accepted after the end");
+                    let t = s.tracker();
+                    assert!(t.walked_m().is_finite() && t.walked_m() >= 0.0, "op {i}");
+                    assert!(t.elapsed_ms() >= 0, "op {i}");
+                    assert!(ack.position.x.is_finite() && ack.position.y.is_finite());
+                    let g = s.guidance();
+                    assert!(
+                        g.distance_m.is_finite() && g.distance_m >= 0.0,
+                        "op {i}: {g:?}"
+                    );
+                    if let Ok(p) = s.progress() {
+                        assert!((0.0..=1.0).contains(&p.fraction_done), "op {i}: {p:?}");
+                        assert!(p.remaining_m.is_finite() && p.remaining_m >= 0.0, "op {i}");
+                        assert!(p.elapsed_s.is_finite() && p.elapsed_s >= 0.0, "op {i}");
+                    }
+                }
+            },
+        }
+    }
+    let again = Session::replay_to(log.clone(), id, i64::MAX).unwrap();
+    assert_eq!(again.digest(), s.digest(), "replay differs");
+}
+
+#[test]
+fn session_seed_once_committed_as_crash_209ed65f_replays_cleanly() {
+    replay_session_fixture("session-209ed65f.json");
+}
+
+#[test]
+fn session_seed_once_committed_as_crash_32c3a55e_replays_cleanly() {
+    replay_session_fixture("session-32c3a55e.json");
 }

@@ -2,8 +2,10 @@
 //! in memory, separated by NUL bytes, in the order `level`, `unit`, `opening`, `amenity`,
 //! `relationship`, `venue`, `building` (a missing part is a missing file).
 //!
-//! Invariants: as for the OSM importer (an `Err` and never a panic for a refused plan; an
-//! accepted plan is a valid building that re-exports to an equal one; bounded memory and time).
+//! Invariants: as for the OSM importer (`trailprint_fuzz::check_floorplan`: an `Err` and
+//! never a panic for a refused plan, the store row for row unchanged; an accepted plan is a
+//! valid building that re-exports to an equal one and that a store in memory takes and gives
+//! back equal; bounded memory and time).
 #![no_main]
 
 use std::collections::HashMap;

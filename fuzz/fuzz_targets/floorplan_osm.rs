@@ -1,8 +1,11 @@
 //! The OpenStreetMap indoor (Simple Indoor Tagging) GeoJSON importer.
 //!
-//! Invariants: a refused plan is an `Err`, never a panic; an accepted one is a building that
-//! passes validation and re-exports to an equal building; memory and time stay bounded
-//! (libFuzzer's `-rss_limit_mb`, `-malloc_limit_mb` and `-timeout`).
+//! Invariants (`trailprint_fuzz::check_floorplan`): a refused plan is an `Err`, never a
+//! panic, and leaves the store row for row unchanged; an accepted one is a building that
+//! passes validation and re-exports to an equal building, and, imported into a store in
+//! memory as `trailprint import-floorplan` does, reads back equal and deletes without a
+//! trace; memory and time stay bounded (libFuzzer's `-rss_limit_mb`, `-malloc_limit_mb` and
+//! `-timeout`).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

@@ -372,21 +372,76 @@ pub fn bundle_checksum(body: &serde_json::Value) -> String {
 
 // ---- floor plans ----
 
+use std::cell::RefCell;
+
 use trailprint::floorplan::FloorplanImport;
 
-/// Checks a floor-plan import's outcome: a refusal is an `Err` naming something; an
-/// accepted plan is a valid building (it passes the same validation as a file), re-exports to
-/// an equal building, and its counts match it.
+thread_local! {
+    /// The in-memory store the floor-plan targets import into, as `trailprint
+    /// import-floorplan` does; kept from input to input (every accepted building is deleted
+    /// again, so it stays empty between inputs).
+    static FLOORPLAN_STORE: RefCell<Option<Store>> = const { RefCell::new(None) };
+}
+
+/// The rows of a snapshot without SQLite's autoincrement counters (an import and a delete
+/// move them on and leave every other row as it was).
+pub fn without_counters(snap: Vec<String>) -> Vec<String> {
+    snap.into_iter()
+        .filter(|r| !r.starts_with("sqlite_sequence"))
+        .collect()
+}
+
+/// Checks a floor-plan import's outcome and takes it on to a store in memory, as
+/// `trailprint import-floorplan` does (`Building::from_file`, then `Store::import_building`).
+///
+/// A refusal is an `Err` naming something, and the store is row for row unchanged. An
+/// accepted plan is a valid building (it passes the same validation as a file), re-exports
+/// to an equal building, and its counts match it; the store takes it (a store refusing a
+/// building the validator accepts is a bug, and must leave the store unchanged), reads it
+/// back equal (`export_building` validates it again; floor outlines and geo-reference
+/// included), and deleting it leaves no row
+/// behind.
 pub fn check_floorplan(result: trailprint::Result<FloorplanImport>, what: &str) {
-    match result {
-        Err(e) => assert!(!e.to_string().is_empty()),
-        Ok(imp) => {
-            let b = Building::from_file(imp.file.clone(), what).unwrap_or_else(|e| {
-                panic!("{what}: the importer wrote a building the validator refuses: {e}")
-            });
-            check_reexport(&b, Some(&imp.file), what);
-            assert_eq!(imp.stats.vertices, b.len(), "{what}: vertex count");
-            assert_eq!(imp.stats.edges, b.edges.len(), "{what}: edge count");
-        }
-    }
+    FLOORPLAN_STORE.with(|cell| {
+        let mut cell = cell.borrow_mut();
+        let store = cell.get_or_insert_with(|| ok(Store::open_in_memory(), "in-memory store"));
+        let before = snapshot(store);
+        let imp = match result {
+            Err(e) => {
+                assert!(!e.to_string().is_empty(), "{what}: an error saying nothing");
+                assert_eq!(
+                    before,
+                    snapshot(store),
+                    "{what}: a refused floor plan changed the store"
+                );
+                return;
+            }
+            Ok(imp) => imp,
+        };
+        let b = Building::from_file(imp.file.clone(), what).unwrap_or_else(|e| {
+            panic!("{what}: the importer wrote a building the validator refuses: {e}")
+        });
+        check_reexport(&b, Some(&imp.file), what);
+        assert_eq!(imp.stats.vertices, b.len(), "{what}: vertex count");
+        assert_eq!(imp.stats.edges, b.edges.len(), "{what}: edge count");
+        let report = match store.import_building(&b, Some(what), &ImportOptions::default()) {
+            Ok(r) => r,
+            Err(e) => {
+                assert_eq!(
+                    before,
+                    snapshot(store),
+                    "{what}: a refused import changed the store ({e})"
+                );
+                panic!("{what}: the store refuses a building the validator accepts: {e}");
+            }
+        };
+        let back = ok(store.export_building(report.id), "export from the store");
+        assert_eq!(back, b.to_file(), "{what}: the store changed the building");
+        ok(store.delete_building(report.id), "delete");
+        assert_eq!(
+            without_counters(before),
+            without_counters(snapshot(store)),
+            "{what}: deleting the imported building left rows behind"
+        );
+    });
 }

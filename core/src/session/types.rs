@@ -19,6 +19,11 @@ pub const MIN_RSS_DBM: f64 = -120.0;
 pub const MAX_READINGS: usize = 4096;
 /// Most steps one step event may carry.
 pub const MAX_STEPS_PER_EVENT: u32 = 10_000;
+/// Latest event time a session accepts, milliseconds since the Unix epoch: 100 Julian years
+/// (early 2070). Event times run from 0 to this; a device clock outside is broken, and the
+/// bound keeps every difference and sum of event times (active time, pauses) far inside
+/// `i64` (the fuzzer sent times at `i64::MIN` and `i64::MAX`).
+pub const MAX_EVENT_T_MS: i64 = 100 * 36_525 * 864_000;
 
 /// Who walks, and what the session assumes about them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -183,7 +188,7 @@ pub struct Reading {
 }
 
 /// What the app reports. Every event carries the device time in milliseconds since the Unix
-/// epoch; times never go backwards within a session.
+/// epoch, from 0 to [`MAX_EVENT_T_MS`]; times never go backwards within a session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {

@@ -215,6 +215,19 @@ pub(super) fn append_in(
     at_ms: i64,
     event: &SessionEvent,
 ) -> Result<i64> {
+    // The session's bound on event times: a bundle or log holding a time past it could be
+    // stored but never replayed into a session.
+    if !(0..=crate::session::MAX_EVENT_T_MS).contains(&at_ms) {
+        return Err(Error::Session {
+            session: session_id,
+            message: format!(
+                "{} event: at_ms must be from 0 to {} ms since the Unix epoch \
+                 (MAX_EVENT_T_MS), got {at_ms}",
+                event.kind(),
+                crate::session::MAX_EVENT_T_MS
+            ),
+        });
+    }
     match event {
         SessionEvent::Step { distance_m, .. } => {
             finite("step", &[("distance_m", *distance_m)])?;

@@ -6,7 +6,8 @@ use crate::Result;
 use crate::building::Building;
 use crate::session::log::LogEvent;
 use crate::session::types::{
-    Event, MAX_READINGS, MAX_RSS_DBM, MAX_STEPS_PER_EVENT, MIN_RSS_DBM, SessionStatus,
+    Event, MAX_EVENT_T_MS, MAX_READINGS, MAX_RSS_DBM, MAX_STEPS_PER_EVENT, MIN_RSS_DBM,
+    SessionStatus,
 };
 
 impl Tracker {
@@ -41,6 +42,13 @@ impl Tracker {
             _ => {}
         }
         let t = ev.t_ms();
+        if !(0..=MAX_EVENT_T_MS).contains(&t) {
+            return Err(self.err(format!(
+                "{} event: t_ms must be a device time from 0 to {MAX_EVENT_T_MS} ms since the \
+                 Unix epoch (MAX_EVENT_T_MS, the year 2070), got {t}",
+                ev.kind()
+            )));
+        }
         if let Some(last) = self.t_last
             && t < last
         {

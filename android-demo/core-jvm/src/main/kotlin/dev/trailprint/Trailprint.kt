@@ -129,6 +129,13 @@ class Trailprint(
     suspend fun exportBundle(buildingId: Long, device: String? = null, surveyorName: String? = null): String =
         withContext(io) { store.exportBundle(buildingId, device, surveyorName) }
 
+    /**
+     * A bundle of exactly the sessions [sessionIds] (all of one building: a bundle holds
+     * one), for sharing chosen surveys; an empty list or a foreign id is an error naming it.
+     */
+    suspend fun exportSessionsBundle(sessionIds: List<Long>, device: String? = null, surveyorName: String? = null): String =
+        withContext(io) { store.exportSessionsBundle(sessionIds, device, surveyorName) }
+
     /** Merges a bundle from another device; importing it again changes nothing. */
     suspend fun importBundle(json: String, origin: String): BundleImportSummary =
         withContext(io) { store.importBundle(json, origin) }

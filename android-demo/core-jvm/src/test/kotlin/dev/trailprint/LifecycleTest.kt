@@ -9,7 +9,10 @@ import dev.trailprint.survey.ActiveSurveyFile
 import dev.trailprint.survey.AwakeMeter
 import dev.trailprint.survey.LifecycleState
 import dev.trailprint.survey.SurveyLifecycle
+import dev.trailprint.survey.NotificationAction
+import dev.trailprint.survey.RecordCheck
 import dev.trailprint.survey.SurveyMode
+import dev.trailprint.survey.SurveyNotificationPolicy
 import dev.trailprint.survey.SurveyPhase
 import dev.trailprint.testing.CountingWakeLock
 import dev.trailprint.testing.FakeSensors
@@ -175,7 +178,7 @@ class LifecycleTest {
         second.await("paused after restart") { it.phase == SurveyPhase.PAUSED }
         kotlinx.coroutines.delay(50)
         assertEquals(0, second.sensors.listening.get(), "a paused survey restarts with its sensors off")
-        assertEquals("Survey paused", second.lifecycle.state.value.notificationTitle())
+        assertEquals("Survey paused", SurveyNotificationPolicy.of(second.lifecycle.state.value).title)
         now.addAndGet(60_000)
         second.lifecycle.resume()
         second.await("running again") { it.phase == SurveyPhase.RUNNING }
@@ -215,11 +218,13 @@ class LifecycleTest {
         assertNull(other.lifecycle.restore())
         assertTrue("987654" in other.lifecycle.state.value.message!!)
 
-        // A corrupt record: the error names the file and the field; forgetting it is possible.
+        // A corrupt record: reported naming the file and the field; forgetting it is possible.
         file.file.writeText("""{"format":"trailprint-active/1","session_id":"x","plan_id":1,"mode":"human","started_ms":0}""")
-        val e = assertFailsWith<AppException> { other.lifecycle.restore() }
-        assertTrue("active.json" in e.message!! && "session_id" in e.message!!, e.message)
+        assertNull(other.lifecycle.restore())
+        val e = other.lifecycle.state.value.unreadableRecord
+        assertTrue(e != null && "active.json" in e && "session_id" in e, e)
         other.lifecycle.forgetActive()
+        assertNull(other.lifecycle.state.value.unreadableRecord)
         assertNull(other.lifecycle.restore())
 
         // A robot survey over plain ws:// to a host outside the local names is refused up front.
@@ -229,6 +234,109 @@ class LifecycleTest {
         val kind = assertFailsWith<AppException> { other.lifecycle.start(planId, SurveyMode.ROBOT) }
         assertTrue("made for a person" in kind.message!!, kind.message)
         assertFalse(file.file.exists(), "a refused start records nothing")
+    }
+
+    @Test
+    fun aCorruptRecordOffersForgetInsteadOfFailingAtEveryRestart() = runBlocking {
+        val db = File(dir, "corrupt.db")
+        val planId = planOn(db)
+        // A survey runs and the process dies; then the record is damaged (a truncated write
+        // by a failing storage, a hand edit).
+        val first = Process(db)
+        val active = first.lifecycle.start(planId, SurveyMode.HUMAN)
+        first.await("running") { it.phase == SurveyPhase.RUNNING }
+        first.step()
+        first.scope.cancel()
+        val record = File(dir, "active.json")
+        record.writeText(record.readText().take(30))
+
+        // The app's launch sees it as a value, with the sentence above "Forget".
+        val check = ActiveSurveyFile(record).check() as? RecordCheck.Unreadable
+            ?: throw AssertionError("a truncated record reads as ${ActiveSurveyFile(record).check()}")
+        assertTrue("active.json" in check.prompt && "Forget" in check.prompt, check.prompt)
+
+        // Every restart of the service (START_STICKY) reports it and runs nothing: no
+        // exception, no loop of failing restores.
+        repeat(3) {
+            val p = Process(db)
+            assertNull(p.lifecycle.restore())
+            val st = p.lifecycle.state.value
+            assertEquals(SurveyPhase.IDLE, st.phase)
+            assertNull(p.lifecycle.controller)
+            assertTrue(st.unreadableRecord != null && "active.json" in st.unreadableRecord!!, st.unreadableRecord)
+        }
+        // A new survey is refused until the record is forgotten, and the refusal says so.
+        val p = Process(db)
+        val refused = assertFailsWith<AppException> { p.lifecycle.start(planId, SurveyMode.HUMAN) }
+        assertTrue("forget it" in refused.message!!, refused.message)
+        assertNotNull(p.lifecycle.state.value.unreadableRecord)
+        p.lifecycle.forgetActive()
+        assertNull(p.lifecycle.state.value.unreadableRecord)
+        assertEquals(RecordCheck.None, ActiveSurveyFile(record).check())
+        // What the forgotten survey collected is still in the database; a new survey starts.
+        val old = p.api.sessions(p.api.plan(planId).buildingId).single { it.id == active.sessionId }
+        assertEquals(SessionStatus.ACTIVE, old.status)
+        assertTrue(old.lastSeq >= 1, "its events are kept: last seq ${old.lastSeq}")
+        val next = p.lifecycle.start(planId, SurveyMode.HUMAN)
+        assertTrue(next.sessionId != active.sessionId)
+        assertEquals(RecordCheck.Found(next), ActiveSurveyFile(record).check())
+        now.addAndGet(1000)
+        assertNotNull(p.lifecycle.abort("test over"))
+        Unit
+    }
+
+    @Test
+    fun theNotificationFollowsTheSurveyAndProgressIsPostedAtMostOncePerSecond() = runBlocking {
+        // Before the session's first progress: an indeterminate bar, no made-up figures.
+        val starting = SurveyNotificationPolicy.of(LifecycleState(phase = SurveyPhase.RUNNING, active = ActiveSurvey(7, 3, SurveyMode.HUMAN, null, 0)))
+        assertTrue(starting.indeterminate && starting.ongoing)
+        assertEquals("Session 7: starting…", starting.text)
+
+        val db = File(dir, "notify.db")
+        val planId = planOn(db)
+        val proc = Process(db)
+        proc.lifecycle.start(planId, SurveyMode.HUMAN)
+        val s0 = proc.await("running with progress") { it.phase == SurveyPhase.RUNNING && it.live.progress != null }
+        val n0 = SurveyNotificationPolicy.of(s0)
+        assertEquals("Survey in progress", n0.title)
+        assertEquals(listOf(NotificationAction.PAUSE, NotificationAction.FINISH), n0.actions)
+        assertTrue(n0.ongoing && !n0.indeterminate)
+        assertTrue("0 fingerprints" in n0.text, n0.text)
+        assertNull(SurveyNotificationPolicy.delayBeforePost(n0, n0, 0, 10), "nothing new, nothing posted")
+        assertEquals(0L, SurveyNotificationPolicy.delayBeforePost(null, n0, 0, 10), "the first one at once")
+
+        assertNotNull(proc.lifecycle.controller!!.checkIn("c00", now.get()))
+        repeat(3) { proc.step() }
+        proc.scan(1)
+        val s1 = proc.await("one fingerprint") { (it.live.progress?.samples ?: 0uL) >= 1uL }
+        val n1 = SurveyNotificationPolicy.of(s1)
+        val p1 = s1.live.progress!!
+        assertEquals((p1.fractionDone * 1000).toInt(), n1.progress)
+        assertTrue(n1.progress > n0.progress, "walking moves the bar: ${n0.progress} -> ${n1.progress}")
+        assertTrue("1 fingerprints" in n1.text && "%.1f".format(p1.collectedUtilityNats) in n1.text, n1.text)
+        // Progress only: once per second at most; the wait is what is left of the second.
+        assertEquals(700L, SurveyNotificationPolicy.delayBeforePost(n0, n1, postedAtMs = 1000, nowMs = 1300))
+        assertEquals(0L, SurveyNotificationPolicy.delayBeforePost(n0, n1, postedAtMs = 1000, nowMs = 2500))
+
+        now.addAndGet(1000)
+        proc.lifecycle.pause()
+        val n2 = SurveyNotificationPolicy.of(proc.await("paused") { it.phase == SurveyPhase.PAUSED })
+        assertEquals("Survey paused", n2.title)
+        assertEquals(listOf(NotificationAction.RESUME, NotificationAction.FINISH), n2.actions)
+        assertEquals(0L, SurveyNotificationPolicy.delayBeforePost(n1, n2, postedAtMs = 1000, nowMs = 1001), "a new phase is posted at once")
+        // A rejected event is the second line, posted at once.
+        val err = SurveyNotificationPolicy.of(s1.copy(live = s1.live.copy(error = "scan rejected: session paused")))
+        assertEquals("scan rejected: session paused", err.subText)
+        assertEquals(0L, SurveyNotificationPolicy.delayBeforePost(n1, err, postedAtMs = 1000, nowMs = 1001))
+
+        now.addAndGet(1000)
+        proc.lifecycle.resume()
+        now.addAndGet(1000)
+        val summary = proc.lifecycle.stop()!!
+        val done = SurveyNotificationPolicy.of(proc.lifecycle.state.value)
+        assertEquals("Survey finished", done.title)
+        assertTrue(done.actions.isEmpty() && !done.ongoing, "a finished survey's notification can be swiped away")
+        assertTrue("${summary.samples} fingerprints" in done.text, done.text)
     }
 
     @Test

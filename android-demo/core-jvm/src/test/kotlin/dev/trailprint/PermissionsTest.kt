@@ -46,6 +46,33 @@ class PermissionsTest {
     }
 
     @Test
+    fun locationIsAskedPreciseAndApproximateTogetherAndApproximateOnlyIsExplained() {
+        val coarse = SurveyPermissions.COARSE_LOCATION
+        // One request carries both, so that Android 12+ shows its precise/approximate choice
+        // (it ignores a request for fine location alone).
+        val first = SurveyPermissions.request(SurveyPermissions.toAsk(SurveyMode.HUMAN, 35, emptySet()))
+        assertEquals(listOf(location, coarse, steps, notify), first)
+        assertTrue(coarse in SurveyPermissions.checked)
+        // The surveyor picked "Approximate": no survey, and the message says what to turn on.
+        val approx = SurveyPermissions.outcome(SurveyMode.HUMAN, 31, setOf(coarse, steps, notify))
+        assertFalse(approx.canStart)
+        assertTrue(approx.approximateOnly)
+        assertTrue("precise location" in approx.blocker!! && "Use precise location" in approx.blocker!!, approx.blocker)
+        // Asking again offers Android's upgrade to precise; again both names.
+        val again = SurveyPermissions.toAsk(SurveyMode.HUMAN, 31, setOf(coarse, steps, notify))
+        assertEquals(listOf(AppPermission.LOCATION), again)
+        assertEquals(listOf(location, coarse), SurveyPermissions.request(again))
+        // Android 9 gives scan results with approximate location: the survey starts.
+        val pie = SurveyPermissions.outcome(SurveyMode.HUMAN, 28, setOf(coarse))
+        assertTrue(pie.canStart && !pie.approximateOnly && pie.blocker == null)
+        assertEquals(emptyList(), SurveyPermissions.toAsk(SurveyMode.HUMAN, 28, setOf(coarse)))
+        // Refused outright: the ordinary message, not the approximate one.
+        val none = SurveyPermissions.outcome(SurveyMode.ROBOT, 35, setOf(notify))
+        assertFalse(none.canStart || none.approximateOnly)
+        assertEquals(AppPermission.LOCATION.ifRefused, none.blocker)
+    }
+
+    @Test
     fun plainWebSocketsOnlyToLocalNames() {
         for (ok in listOf("ws://localhost:9090", "ws://127.0.0.1:9090", "ws://10.0.2.2:9090", "ws://turtlebot.local:9090", "wss://robot.example.org/ros", "ws://Robot.Local.:9090")) {
             assertNull(CleartextPolicy.check(ok), ok)

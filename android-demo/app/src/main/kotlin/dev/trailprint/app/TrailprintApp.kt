@@ -5,8 +5,14 @@ import android.os.Build
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.files.ExportFiles
+import dev.trailprint.files.Incoming
+import dev.trailprint.team.WalkInbox
+import dev.trailprint.team.WalkInboxModel
 import dev.trailprint.survey.ActiveSurveyFile
 import java.io.File
+import kotlinx.coroutines.CoroutineScope
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.SupervisorJob
 import kotlinx.coroutines.flow.MutableStateFlow
 
 /** A file another app handed to Trailprint (share sheet, "open with"): its name and text. */
@@ -38,8 +44,17 @@ class TrailprintApp : Application() {
     /** Robot mode: a rosbridge WebSocket URL (`ws://robot.local:9090`), or null for the simulated robot. */
     @Volatile var rosbridgeUrl: String? = null
 
-    /** Files shared to the app, waiting for the team or walk screen. */
-    val incoming = MutableStateFlow<List<IncomingFile>>(emptyList())
+    /** Scope of what outlives a screen (the walk inbox). */
+    val scope = CoroutineScope(SupervisorJob() + Dispatchers.Main.immediate)
+
+    /** Walk files received on this phone, kept until opened ("Not opened"), and the dialog to open one. */
+    val walks: WalkInboxModel by lazy { WalkInboxModel(api, scope, WalkInbox(File(filesDir, "walk-inbox"))) }
+
+    /** Bundles shared to the app, waiting for the team screen (during a survey, until it ends). */
+    val incomingBundles = MutableStateFlow<List<Incoming.Bundle>>(emptyList())
+
+    /** Building files shared to the app, waiting for the buildings screen. */
+    val incomingBuildings = MutableStateFlow<List<Incoming.Building>>(emptyList())
 
     /** The demo building shipped in the assets (android-demo/demo/demo-building.json). */
     fun demoBuildingJson(): String = assets.open("demo-building.json").bufferedReader().use { it.readText() }

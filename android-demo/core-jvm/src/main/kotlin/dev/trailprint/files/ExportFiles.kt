@@ -51,6 +51,20 @@ class ExportFiles(
         write("trailprint-${slug(name)}-bundle-$who.json", text, JSON, "Survey bundle of $name")
     }
 
+    /**
+     * The bundle of just the sessions [sessionIds] (of one building), for re-sharing chosen
+     * past surveys; named after the building, the sessions and [surveyorName] or [device].
+     */
+    suspend fun sessionsBundle(sessionIds: List<Long>, device: String?, surveyorName: String?): ShareableFile = withContext(io) {
+        val text = api.store.exportSessionsBundle(sessionIds, device, surveyorName)
+        val ids = sessionIds.distinct().sorted()
+        val first = api.store.resumeSession(ids.first()).use { it.buildingId() }
+        val name = buildingName(first)
+        val who = slug(surveyorName ?: device ?: "phone")
+        val which = if (ids.size == 1) "session-${ids[0]}" else "sessions-${ids.first()}-to-${ids.last()}-${ids.size}"
+        write("trailprint-${slug(name)}-bundle-$which-$who.json", text, JSON, "Survey bundle of $name (${ids.size} session${if (ids.size == 1) "" else "s"})")
+    }
+
     /** Writes [text] as [fileName] in [dir]. */
     fun write(fileName: String, text: String, mimeType: String, title: String): ShareableFile {
         val f = File(dir, fileName)

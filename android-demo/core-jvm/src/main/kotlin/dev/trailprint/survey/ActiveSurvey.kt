@@ -23,6 +23,23 @@ data class ActiveSurvey(
     val startedMs: Long,
 )
 
+/** What the active-survey record says at launch, without throwing (see [ActiveSurveyFile.check]). */
+sealed interface RecordCheck {
+    /** No survey was running. */
+    data object None : RecordCheck
+
+    /** A survey was running: carry on with it. */
+    data class Found(val survey: ActiveSurvey) : RecordCheck
+
+    /** The record exists but cannot be read; [message] names the file and the field. */
+    data class Unreadable(val message: String) : RecordCheck {
+        /** What the surveyor reads above "Forget". */
+        val prompt: String
+            get() = "The survey that was running when Trailprint last stopped cannot be carried on: $message. " +
+                "Forget it to survey again; what it collected stays in the database (Past surveys)."
+    }
+}
+
 /**
  * Which survey is active, in one small JSON file (`trailprint-active/1`) next to the
  * database. Written atomically when a survey starts and deleted when it ends, so after
@@ -59,6 +76,13 @@ class ActiveSurveyFile(val file: File) {
         val url = o["rosbridge_url"]
         if (url != null && url !is String) bad("rosbridge_url", "expected a string or null")
         return ActiveSurvey(whole("session_id"), whole("plan_id"), mode, url as String?, whole("started_ms"))
+    }
+
+    /** [read], with an unreadable record as a value rather than an exception (the app's launch). */
+    fun check(): RecordCheck = try {
+        read()?.let { RecordCheck.Found(it) } ?: RecordCheck.None
+    } catch (e: AppException) {
+        RecordCheck.Unreadable(e.message ?: "cannot read $file")
     }
 
     /** Records [survey] as the active one (replacing any other). */

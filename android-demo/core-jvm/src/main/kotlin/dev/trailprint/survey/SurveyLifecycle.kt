@@ -55,26 +55,13 @@ data class LifecycleState(
     val summary: SessionSummary? = null,
     /** Something the surveyor should read: a survey carried on after a restart, a robot error. */
     val message: String? = null,
+    /**
+     * The active-survey record exists but cannot be read (the message names the file and
+     * the field): the screen offers [SurveyLifecycle.forgetActive] ("Forget"), since no
+     * survey can start or carry on until it is gone.
+     */
+    val unreadableRecord: String? = null,
 ) {
-    /** The notification's title. */
-    fun notificationTitle(): String = when (phase) {
-        SurveyPhase.RUNNING -> "Survey in progress"
-        SurveyPhase.PAUSED -> "Survey paused"
-        SurveyPhase.FINISHED -> "Survey finished"
-        SurveyPhase.ABORTED -> "Survey stopped"
-        SurveyPhase.IDLE -> "No survey"
-    }
-
-    /** The notification's text: how far, how many fingerprints, how much information. */
-    fun notificationText(): String {
-        val p = live.progress ?: return active?.let { "Session ${it.sessionId}" } ?: ""
-        return "%.0f%% of the walk · %d fingerprints · %.1f of %.1f nats".format(
-            100 * p.fractionDone, p.samples.toLong(), p.collectedUtilityNats, p.plannedUtilityNats,
-        )
-    }
-
-    /** Progress bar of the notification, 0 to 1000. */
-    fun notificationProgress(): Int = ((live.progress?.fractionDone ?: 0.0).coerceIn(0.0, 1.0) * 1000).toInt()
 }
 
 /**
@@ -125,7 +112,12 @@ class SurveyLifecycle(
      * the other way round. Refused while another survey is active.
      */
     suspend fun start(planId: Long, mode: SurveyMode, rosbridgeUrl: String? = null): ActiveSurvey = ops.withLock {
-        val running = _state.value.active ?: activeFile.read()
+        val running = _state.value.active ?: try {
+            activeFile.read()
+        } catch (e: AppException) {
+            _state.update { it.copy(unreadableRecord = e.message) }
+            throw AppException("${e.message} — the record of the last survey cannot be read: forget it to start a new survey", e)
+        }
         if (running != null) {
             throw AppException("a survey is already active (session ${running.sessionId}): finish or abort it before starting another")
         }
@@ -157,11 +149,19 @@ class SurveyLifecycle(
     /**
      * After a restart: carries on with the survey [activeFile] names, if any. A paused
      * survey stays paused (its sensors off); a running one gets its sensors back. A record
-     * whose session has ended or is gone is cleared, and the state says why.
+     * whose session has ended or is gone is cleared, and the state says why. A record that
+     * cannot be read is not an exception here (a service restarted by the system would
+     * fail the same way at every restart): it is [LifecycleState.unreadableRecord], for the
+     * screen to offer "Forget", and nothing runs.
      */
     suspend fun restore(): ActiveSurvey? = ops.withLock {
         if (_state.value.active != null) return@withLock _state.value.active
-        val active = activeFile.read() ?: return@withLock null
+        val active = try {
+            activeFile.read()
+        } catch (e: AppException) {
+            _state.value = LifecycleState(unreadableRecord = e.message)
+            return@withLock null
+        } ?: return@withLock null
         val s = try {
             api.resumeSession(active.sessionId)
         } catch (e: TrailprintException.NotFound) {
@@ -209,11 +209,13 @@ class SurveyLifecycle(
 
     /**
      * Forgets the active-survey record without touching its session (for a record that
-     * cannot be read: the error names the file). Refused while a survey is attached.
+     * cannot be read: the error names the file). What the session collected stays in the
+     * database. Refused while a survey is attached.
      */
     suspend fun forgetActive() = ops.withLock {
         if (controller != null) throw AppException("a survey is running: stop or abort it instead")
         activeFile.clear()
+        _state.update { it.copy(unreadableRecord = null) }
     }
 
     /** Finishes the survey: the session's summary, the active record cleared. */

@@ -67,10 +67,14 @@ class FinishModel(
 
     fun shareJson() = export { exports.sessionJson(it) }
 
-    /** The bundle of the survey's building, named after this [device] and [surveyorName]. */
-    fun shareBundle(device: String?, surveyorName: String?) = export {
-        val bid = _state.value.buildingId ?: throw AppException("the session is not loaded yet")
-        exports.bundle(bid, device, surveyorName?.trim()?.ifEmpty { null })
+    /**
+     * The bundle of this survey's session (not every session the phone holds of the
+     * building: those it imported from the team are the coordinator's already), named
+     * after this [device] and [surveyorName].
+     */
+    fun shareBundle(device: String?, surveyorName: String?) = export { sid ->
+        if (_state.value.buildingId == null) throw AppException("the session is not loaded yet")
+        exports.sessionsBundle(listOf(sid), device, surveyorName?.trim()?.ifEmpty { null })
     }
 
     /** The share sheet was shown. */

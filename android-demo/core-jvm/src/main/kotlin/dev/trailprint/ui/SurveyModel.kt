@@ -47,6 +47,8 @@ data class SurveyUiState(
     /** A note from the survey's lifecycle (carried on after a restart, a robot error). */
     val notice: String? = null,
     val finished: SessionSummary? = null,
+    /** The active-survey record cannot be read: show it with a "Forget" button ([SurveyModel.forgetRecord]). */
+    val unreadableRecord: String? = null,
     val busy: Boolean = false,
     val error: String? = null,
 ) {
@@ -122,6 +124,7 @@ class SurveyModel(private val lifecycle: SurveyLifecycle, private val scope: Cor
         _state.value = ui.copy(
             notice = ls.message,
             finished = (ls.summary ?: ui.finished)?.takeIf { it.sessionId == seen },
+            unreadableRecord = ls.unreadableRecord,
             busy = busy,
             error = error ?: ui.error,
         )
@@ -146,6 +149,9 @@ class SurveyModel(private val lifecycle: SurveyLifecycle, private val scope: Cor
     }
 
     fun finish() = act { lifecycle.stop() }
+
+    /** Forgets an unreadable active-survey record (its session's data stay in the database). */
+    fun forgetRecord() = act { lifecycle.forgetActive() }
 
     fun abort(reason: String? = null) = act { lifecycle.abort(reason) }
 

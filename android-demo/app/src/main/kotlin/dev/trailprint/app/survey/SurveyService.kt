@@ -11,6 +11,7 @@ import android.os.Binder
 import android.os.Build
 import android.os.IBinder
 import android.os.PowerManager
+import android.os.SystemClock
 import androidx.core.app.NotificationCompat
 import androidx.core.app.NotificationManagerCompat
 import androidx.core.app.ServiceCompat
@@ -19,17 +20,18 @@ import dev.trailprint.AppException
 import dev.trailprint.app.MainActivity
 import dev.trailprint.app.TrailprintApp
 import dev.trailprint.ffi.TrailprintException
-import dev.trailprint.survey.LifecycleState
+import dev.trailprint.survey.NotificationAction
 import dev.trailprint.survey.SurveyLifecycle
 import dev.trailprint.survey.SurveyMode
-import dev.trailprint.survey.SurveyPhase
+import dev.trailprint.survey.SurveyNotification
+import dev.trailprint.survey.SurveyNotificationPolicy
 import dev.trailprint.survey.WakeLockHandle
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.SupervisorJob
 import kotlinx.coroutines.cancel
 import kotlinx.coroutines.delay
-import kotlinx.coroutines.flow.conflate
+import kotlinx.coroutines.flow.collectLatest
 import kotlinx.coroutines.flow.distinctUntilChanged
 import kotlinx.coroutines.flow.drop
 import kotlinx.coroutines.flow.map
@@ -67,13 +69,17 @@ class SurveyService : Service() {
         lifecycle = SurveyLifecycle(app.api, app.activeSurvey, AndroidSurveySensors(this), scope, wakeLock)
         getSystemService(NotificationManager::class.java)
             .createNotificationChannel(NotificationChannel(CHANNEL, "Survey in progress", NotificationManager.IMPORTANCE_LOW))
+        // What to show and when is SurveyNotificationPolicy's (host-tested); this only posts it.
         scope.launch {
-            lifecycle.state.map { Triple(it.notificationTitle(), it.notificationText(), it.notificationProgress()) }
-                .distinctUntilChanged().conflate()
-                .collect {
-                    notifyProgress(lifecycle.state.value)
-                    delay(1000) // Android drops notification updates that come faster
-                }
+            var posted: SurveyNotification? = null
+            var postedAt = 0L
+            lifecycle.state.map(SurveyNotificationPolicy::of).distinctUntilChanged().collectLatest { n ->
+                val wait = SurveyNotificationPolicy.delayBeforePost(posted, n, postedAt, SystemClock.elapsedRealtime()) ?: return@collectLatest
+                delay(wait) // a newer state cancels this wait and posts itself instead
+                notifyProgress(n)
+                posted = n
+                postedAt = SystemClock.elapsedRealtime()
+            }
         }
         // The survey ended (from the screen or the notification): leave the foreground.
         scope.launch {
@@ -89,7 +95,7 @@ class SurveyService : Service() {
     override fun onStartCommand(intent: Intent?, flags: Int, startId: Int): Int {
         try {
             ServiceCompat.startForeground(
-                this, NOTIFICATION_ID, notification(lifecycle.state.value),
+                this, NOTIFICATION_ID, notification(SurveyNotificationPolicy.of(lifecycle.state.value)),
                 if (Build.VERSION.SDK_INT >= 29) ServiceInfo.FOREGROUND_SERVICE_TYPE_LOCATION else 0,
             )
         } catch (e: SecurityException) {
@@ -108,9 +114,18 @@ class SurveyService : Service() {
                         SurveyMode.valueOf(intent.getStringExtra(EXTRA_MODE) ?: SurveyMode.HUMAN.name),
                         intent.getStringExtra(EXTRA_ROSBRIDGE),
                     )
+                    // The process may have been restarted for a tap on the notification.
                     ACTION_FINISH -> {
-                        lifecycle.restore() // the process may have been restarted for this tap
+                        lifecycle.restore()
                         lifecycle.stop()
+                    }
+                    ACTION_PAUSE -> {
+                        lifecycle.restore()
+                        lifecycle.pause()
+                    }
+                    ACTION_RESUME -> {
+                        lifecycle.restore()
+                        lifecycle.resume()
                     }
                     else -> lifecycle.restore() // restarted after the process was killed
                 }
@@ -133,41 +148,53 @@ class SurveyService : Service() {
         super.onDestroy()
     }
 
-    private fun notifyProgress(s: LifecycleState) {
+    private fun notifyProgress(n: SurveyNotification) {
         val nm = NotificationManagerCompat.from(this)
         if (nm.areNotificationsEnabled()) {
             try {
-                nm.notify(NOTIFICATION_ID, notification(s))
+                nm.notify(NOTIFICATION_ID, notification(n))
             } catch (e: SecurityException) {
                 // POST_NOTIFICATIONS refused: the survey runs on, the screen says so.
             }
         }
     }
 
-    private fun notification(s: LifecycleState) = NotificationCompat.Builder(this, CHANNEL)
-        .setSmallIcon(android.R.drawable.ic_menu_mylocation)
-        .setContentTitle(s.notificationTitle())
-        .setContentText(s.notificationText())
-        .setProgress(1000, s.notificationProgress(), false)
-        .setOngoing(s.phase == SurveyPhase.RUNNING || s.phase == SurveyPhase.PAUSED)
-        .setOnlyAlertOnce(true)
-        .setContentIntent(
-            PendingIntent.getActivity(this, 0, Intent(this, MainActivity::class.java), PendingIntent.FLAG_IMMUTABLE),
-        )
-        .addAction(
-            0, "Finish survey",
-            PendingIntent.getService(
-                this, 1, Intent(this, SurveyService::class.java).setAction(ACTION_FINISH),
-                PendingIntent.FLAG_IMMUTABLE or PendingIntent.FLAG_UPDATE_CURRENT,
-            ),
-        )
-        .build()
+    private fun notification(n: SurveyNotification): android.app.Notification {
+        val b = NotificationCompat.Builder(this, CHANNEL)
+            .setSmallIcon(android.R.drawable.ic_menu_mylocation)
+            .setContentTitle(n.title)
+            .setContentText(n.text)
+            .setSubText(n.subText)
+            .setProgress(SurveyNotification.PROGRESS_MAX, n.progress, n.indeterminate)
+            .setOngoing(n.ongoing)
+            .setOnlyAlertOnce(true)
+            .setContentIntent(
+                PendingIntent.getActivity(this, 0, Intent(this, MainActivity::class.java), PendingIntent.FLAG_IMMUTABLE),
+            )
+        n.actions.forEach { a ->
+            val action = when (a) {
+                NotificationAction.PAUSE -> ACTION_PAUSE
+                NotificationAction.RESUME -> ACTION_RESUME
+                NotificationAction.FINISH -> ACTION_FINISH
+            }
+            b.addAction(
+                0, a.label,
+                PendingIntent.getService(
+                    this, a.ordinal + 1, Intent(this, SurveyService::class.java).setAction(action),
+                    PendingIntent.FLAG_IMMUTABLE or PendingIntent.FLAG_UPDATE_CURRENT,
+                ),
+            )
+        }
+        return b.build()
+    }
 
     companion object {
         private const val CHANNEL = "survey"
         private const val NOTIFICATION_ID = 19
         private const val ACTION_START = "dev.trailprint.START"
         private const val ACTION_FINISH = "dev.trailprint.FINISH"
+        private const val ACTION_PAUSE = "dev.trailprint.PAUSE"
+        private const val ACTION_RESUME = "dev.trailprint.RESUME"
         private const val EXTRA_PLAN = "plan"
         private const val EXTRA_MODE = "mode"
         private const val EXTRA_ROSBRIDGE = "rosbridge"

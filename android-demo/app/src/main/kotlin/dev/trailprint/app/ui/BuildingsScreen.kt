@@ -21,6 +21,7 @@ import androidx.compose.material3.OutlinedButton
 import androidx.compose.material3.Text
 import androidx.compose.material3.TextButton
 import androidx.compose.runtime.Composable
+import androidx.compose.runtime.LaunchedEffect
 import androidx.compose.runtime.getValue
 import androidx.compose.ui.Modifier
 import androidx.compose.ui.unit.dp
@@ -29,9 +30,9 @@ import androidx.lifecycle.compose.collectAsStateWithLifecycle
 import androidx.lifecycle.viewModelScope
 import androidx.lifecycle.viewmodel.compose.viewModel
 import androidx.compose.ui.platform.LocalContext
-import dev.trailprint.app.IncomingFile
 import dev.trailprint.app.TrailprintApp
-import dev.trailprint.app.readDocument
+import dev.trailprint.app.readIncoming
+import dev.trailprint.files.Incoming
 import dev.trailprint.ui.BuildingsModel
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.launch
@@ -44,6 +45,15 @@ class BuildingsViewModel(app: Application) : AndroidViewModel(app) {
 
     init {
         model.refresh()
+        // Building files shared to the app from another one.
+        viewModelScope.launch {
+            trailprint.incomingBuildings.collect { files ->
+                if (files.isNotEmpty()) {
+                    trailprint.incomingBuildings.value = emptyList()
+                    files.forEach { model.import(it.text, it.name).join() }
+                }
+            }
+        }
     }
 
     fun importDemo() = viewModelScope.launch {
@@ -63,25 +73,30 @@ class BuildingsViewModel(app: Application) : AndroidViewModel(app) {
         model.import(json, name)
     }
 
-    /** Reads a picked document for another screen. */
-    fun receive(uri: Uri, then: (IncomingFile) -> Unit) = viewModelScope.launch {
-        try {
-            then(withContext(Dispatchers.IO) { getApplication<Application>().readDocument(uri) })
-        } catch (e: java.io.IOException) {
-            model.reportError("Cannot read the file: ${e.message}")
+    /** A picked walk file: kept in the walk inbox and asked about; anything else refused by name. */
+    fun receiveWalk(uri: Uri, then: () -> Unit) = viewModelScope.launch {
+        when (val f = withContext(Dispatchers.IO) { getApplication<Application>().readIncoming(uri) }) {
+            is Incoming.Walk -> {
+                trailprint.walks.receive(listOf(f.name to f.text))
+                then()
+            }
+            is Incoming.Refused -> model.reportError(f.line())
+            else -> model.reportError("${f.name}: not a walk file (open bundles under Coordinate a team, buildings with Import file)")
         }
     }
 }
 
 @Composable
-fun BuildingsScreen(onOpen: (Long) -> Unit, onTeam: () -> Unit, onWalkFile: () -> Unit, vm: BuildingsViewModel = viewModel()) {
+fun BuildingsScreen(onOpen: (Long) -> Unit, onTeam: () -> Unit, onWalkFiles: () -> Unit, onPastSurveys: () -> Unit, vm: BuildingsViewModel = viewModel()) {
     val state by vm.model.state.collectAsStateWithLifecycle()
     val context = LocalContext.current
+    val walks by (context.applicationContext as TrailprintApp).walks.state.collectAsStateWithLifecycle()
     val picker = rememberLauncherForActivityResult(ActivityResultContracts.OpenDocument()) { uri -> uri?.let(vm::importUri) }
-    // A walk file from the coordinator: read it and hand it to the walk screen.
+    // A walk file from the coordinator: kept in the walk inbox, then the walk screen asks.
     val walkPicker = rememberLauncherForActivityResult(ActivityResultContracts.OpenDocument()) { uri ->
-        uri?.let { vm.receive(it) { f -> (context.applicationContext as TrailprintApp).incoming.value = listOf(f); onWalkFile() } }
+        uri?.let { vm.receiveWalk(it, onWalkFiles) }
     }
+    LaunchedEffect(Unit) { (context.applicationContext as TrailprintApp).walks.refresh() }
     Column(Modifier.fillMaxSize().padding(16.dp), verticalArrangement = Arrangement.spacedBy(12.dp)) {
         Text("Buildings", style = androidx.compose.material3.MaterialTheme.typography.headlineMedium)
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
@@ -91,6 +106,11 @@ fun BuildingsScreen(onOpen: (Long) -> Unit, onTeam: () -> Unit, onWalkFile: () -
         Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
             OutlinedButton(onClick = { walkPicker.launch(arrayOf("application/json", "*/*")) }) { Text("Open a walk file") }
             OutlinedButton(onClick = onTeam) { Text("Coordinate a team") }
+        }
+        Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
+            val waiting = walks.inbox.count { !it.opened }
+            OutlinedButton(onClick = onWalkFiles) { Text(if (waiting > 0) "Walk files ($waiting not opened)" else "Walk files") }
+            OutlinedButton(onClick = onPastSurveys) { Text("Past surveys") }
         }
         if (state.busy) LinearProgressIndicator(Modifier.fillMaxWidth())
         LazyColumn(verticalArrangement = Arrangement.spacedBy(8.dp)) {

@@ -78,8 +78,8 @@ class SurveyViewModel(app: Application) : AndroidViewModel(app) {
     override fun onCleared() = getApplication<Application>().unbindService(connection)
 }
 
-/** The permissions granted now, by manifest name. */
-private fun granted(context: Context): Set<String> = AppPermission.entries.map { it.manifestName }
+/** The permissions granted now, by manifest name (approximate location included). */
+private fun granted(context: Context): Set<String> = SurveyPermissions.checked
     .filter { ContextCompat.checkSelfPermission(context, it) == PackageManager.PERMISSION_GRANTED }.toSet()
 
 private fun arrow(t: Turn?): String = when (t) {
@@ -123,12 +123,13 @@ fun SurveyScreen(
     if (asking.isNotEmpty()) {
         AlertDialog(
             onDismissRequest = {},
-            confirmButton = { TextButton(onClick = { permissions.launch(asking.map { it.manifestName }.toTypedArray()); asking = emptyList() }) { Text("Continue") } },
+            confirmButton = { TextButton(onClick = { permissions.launch(SurveyPermissions.request(asking).toTypedArray()); asking = emptyList() }) { Text("Continue") } },
             title = { Text("Before the survey starts") },
             text = { Text(asking.joinToString("\n\n") { it.reason }) },
         )
     }
-    outcome?.blocker?.let { msg ->
+    outcome?.let { o ->
+        val msg = o.blocker ?: return@let
         AlertDialog(
             onDismissRequest = { outcome = null },
             confirmButton = {
@@ -136,8 +137,15 @@ fun SurveyScreen(
                     context.startActivity(Intent(Settings.ACTION_APPLICATION_DETAILS_SETTINGS, Uri.fromParts("package", context.packageName, null)))
                 }) { Text("Open settings") }
             },
-            dismissButton = { TextButton(onClick = { outcome = null }) { Text("Not now") } },
-            title = { Text("Cannot survey") },
+            dismissButton = {
+                // Approximate only: asking again shows Android's "change to precise" dialog.
+                if (o.approximateOnly) {
+                    TextButton(onClick = { outcome = null; permissions.launch(SurveyPermissions.request(listOf(AppPermission.LOCATION)).toTypedArray()) }) { Text("Allow precise") }
+                } else {
+                    TextButton(onClick = { outcome = null }) { Text("Not now") }
+                }
+            },
+            title = { Text(if (o.approximateOnly) "Precise location needed" else "Cannot survey") },
             text = { Text(msg) },
         )
     }
@@ -182,6 +190,14 @@ fun SurveyScreen(
             OutlinedButton(onClick = m::replan, enabled = !s.busy) { Text("Replan") }
             Button(onClick = m::finish) { Text("Finish") }
         }
+    }
+    s.unreadableRecord?.let { msg ->
+        AlertDialog(
+            onDismissRequest = {},
+            confirmButton = { TextButton(onClick = m::forgetRecord) { Text("Forget") } },
+            title = { Text("The last survey cannot be carried on") },
+            text = { Text(dev.trailprint.survey.RecordCheck.Unreadable(msg).prompt) },
+        )
     }
     s.error?.let { msg ->
         AlertDialog(

@@ -53,9 +53,9 @@ class TeamViewModel(app: Application) : AndroidViewModel(app) {
         model.refresh()
         // Bundles shared to the app from another one (the share sheet) wait in TrailprintApp.
         viewModelScope.launch {
-            trailprint.incoming.collect { files ->
+            trailprint.incomingBundles.collect { files ->
                 if (files.isNotEmpty()) {
-                    trailprint.incoming.value = emptyList()
+                    trailprint.incomingBundles.value = emptyList()
                     model.importBundles(files.map { it.name to it.text })
                 }
             }
