@@ -1075,10 +1075,11 @@ fn edit_distance(a: &[char], b: &[char]) -> usize {
     prev[b.len()]
 }
 
-/// Why `text` cannot be a building file at first sight (empty, or its first character
-/// cannot start a JSON document: CSV, Markdown, plain text), or `None` when JSON parsing
-/// should judge it (a `[` or `{` document; its errors carry a JSON path).
-fn not_json_object(text: &str) -> Option<String> {
+/// Why `text` cannot be a JSON file at first sight (empty, or its first character cannot
+/// start a JSON document: CSV, Markdown, plain text), or `None` when JSON parsing should
+/// judge it (a `[` or `{` document; its errors carry a JSON path). Building files, floor
+/// plans and pilot lists are refused with it.
+pub fn not_json_object(text: &str) -> Option<String> {
     let trimmed = text.trim_start_matches(['\u{feff}', ' ', '\t', '\r', '\n']);
     if trimmed.is_empty() {
         return Some("the file is empty".into());

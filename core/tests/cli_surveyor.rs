@@ -384,7 +384,7 @@ fn errors_say_what_would_do() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, text).expect("write");
-        let e = run_err(
+        let building = run_err(
             &db,
             &[
                 "plan",
@@ -398,15 +398,42 @@ fn errors_say_what_would_do() {
                 "5",
             ],
         );
+        let e = &building;
         assert!(
-            e.contains("not a JSON survey-building/1 file") && e.contains(begins),
+            e.contains(&format!("{name}: not a JSON survey-building/1 file")) && e.contains(begins),
             "{e}"
         );
         assert!(
             !e.contains("expected ident") && !e.contains("expected value"),
             "{e}"
         );
+        // The same files given as a floor plan or a pilot list say what they are not.
+        let file = path.to_str().expect("utf-8");
+        let plan = run_err(&db, &["import-floorplan", file]);
+        assert!(
+            plan.contains(&format!("{name}: not a GeoJSON floor plan")) && plan.contains(begins),
+            "{plan}"
+        );
+        let pilot = run_err(&db, &["pilot", "add", DEMO, file]);
+        assert!(
+            pilot.contains(&format!("{name}: not a JSON pilot list")) && pilot.contains(begins),
+            "{pilot}"
+        );
+        // JSON paths are named, the document itself (`$`) is not.
+        for e in [&building, &plan, &pilot] {
+            assert!(!e.contains("$:"), "{e}");
+        }
     }
+    // Broken JSON as a floor plan: where it breaks, without the `$` of the document.
+    let broken = dir.path().join("cut.geojson");
+    std::fs::write(&broken, "{\"type\": \"FeatureCollection\", \"features\": [").expect("write");
+    let e = run_err(&db, &["import-floorplan", broken.to_str().expect("utf-8")]);
+    assert!(
+        e.contains("cut.geojson: not a GeoJSON floor plan")
+            && e.contains("line 1")
+            && !e.contains("$:"),
+        "{e}"
+    );
     // A negative budget is a number the planner refuses, not an unknown option.
     for cmd in ["plan", "simulate"] {
         let mut args = vec![
@@ -610,7 +637,15 @@ fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
         let e = run_err(
             &db,
             &[
-                "plan", "--building", building, "--start", typed, "--end", end, "--budget", "30",
+                "plan",
+                "--building",
+                building,
+                "--start",
+                typed,
+                "--end",
+                end,
+                "--budget",
+                "30",
             ],
         );
         assert!(
@@ -622,7 +657,15 @@ fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
     let e = run_err(
         &db,
         &[
-            "plan", "--building", DEMO, "--start", "f0-c00", "--end", "c15", "--budget", "30",
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c00",
+            "--end",
+            "c15",
+            "--budget",
+            "30",
         ],
     );
     assert!(
