@@ -675,3 +675,196 @@ fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
     let e = run_err(&db, &["utility", "--building", DEMO, "--walk", "c0,c1"]);
     assert!(e.contains("did you mean \"f0-c00\"?"), "{e}");
 }
+
+/// The class tokens of an SVG's elements, split at the legend: (drawn on the floors,
+/// in the legend's swatches). Containers (`<g>`), the floor frames (`panel`), the
+/// outlines' lines redrawn over the heat map (`outline-line`), a walk's colour index
+/// (`walk-N`) and text in words (titles, "stairs to Level 1 (4 m)", "start = end": they
+/// say what they are) are left out.
+fn mark_classes(
+    svg: &str,
+) -> (
+    std::collections::BTreeSet<String>,
+    std::collections::BTreeSet<String>,
+) {
+    let legend_at = svg.find("<g class=\"legend\">").expect("a legend");
+    let classes = |part: &str| {
+        let mut out = std::collections::BTreeSet::new();
+        for tag in part.split('<').skip(1) {
+            let name = tag.split([' ', '>', '/']).next().unwrap_or("");
+            if name == "g" || name.is_empty() {
+                continue;
+            }
+            let Some(class) = tag
+                .split("class=\"")
+                .nth(1)
+                .and_then(|c| c.split('"').next())
+            else {
+                continue;
+            };
+            let text = tag.split_once('>').map_or("", |(_, t)| t);
+            if name == "text" && text.contains(' ') {
+                continue;
+            }
+            for c in class.split_whitespace() {
+                let walk_index = c
+                    .strip_prefix("walk-")
+                    .is_some_and(|n| n.parse::<u32>().is_ok());
+                let words = ["heading", "title", "subtitle", "legend-text", "heat-scale"];
+                if !(walk_index || words.contains(&c) || c == "panel" || c == "outline-line") {
+                    out.insert(c.to_string());
+                }
+            }
+        }
+        out
+    };
+    (classes(&svg[..legend_at]), classes(&svg[legend_at..]))
+}
+
+/// Every kind of mark a map draws has its legend entry, and the legend has no entry for a
+/// mark the map does not draw ("edge walked twice" only when an edge is walked twice):
+/// an imported floor plan (building footprint, rooms, walls, stairs, an elevator) with a
+/// walk that ends where it starts and vertex ids, a walk there and back and one that is
+/// not, two surveyors who share an edge and two who do not, and a session as walked.
+#[test]
+fn every_mark_on_a_map_has_its_legend_entry() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let office = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/floorplans/office-l.geojson"
+    );
+    run_ok(&db, &["import-floorplan", office, "--name", "Office"]);
+    run_ok(&db, &["import", DEMO]);
+    let demo = demo_name();
+    let out = run_ok(
+        &db,
+        &[
+            "plan",
+            "--building",
+            "Office",
+            "--start",
+            "f0-s0-1",
+            "--end",
+            "f0-s0-1",
+            "--budget",
+            "60",
+            "--kernel",
+            "40,6,9",
+            "--model",
+            "human",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let plan: serde_json::Value =
+        serde_json::from_str(out.lines().last().expect("json")).expect("plan json");
+    let plan_id = plan["plan_id"].as_i64().expect("plan id").to_string();
+    let sim = run_ok(
+        &db,
+        &[
+            &["simulate", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--surveyor",
+                "human",
+                "--deviate",
+                "0.2",
+                "--time-limit",
+                "0.3",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    let sim: serde_json::Value =
+        serde_json::from_str(sim.lines().last().expect("json")).expect("json");
+    let session = sim["session_id"].as_i64().expect("session id").to_string();
+    let cases: Vec<(&str, Vec<&str>, Option<bool>)> = vec![
+        (
+            "office, start = end, ids",
+            vec!["--plan", &plan_id, "--labels"],
+            None,
+        ),
+        (
+            "there and back",
+            vec!["--building", &demo, "--walk", "f0-c00,f0-c01,f0-c00"],
+            Some(true),
+        ),
+        (
+            "one way",
+            vec!["--building", &demo, "--walk", "f0-c00,f0-c01,f0-c02"],
+            Some(false),
+        ),
+        (
+            "team sharing an edge",
+            vec![
+                "--building",
+                &demo,
+                "--team",
+                "f0-c00,f0-c01",
+                "--team",
+                "f0-c02,f0-c01,f0-c00",
+            ],
+            Some(true),
+        ),
+        (
+            "team apart",
+            vec![
+                "--building",
+                &demo,
+                "--team",
+                "f0-c00,f0-c01",
+                "--team",
+                "f0-c03,f0-c04",
+            ],
+            Some(false),
+        ),
+        ("session", vec!["--session", &session], None),
+    ];
+    for (what, args, repeat) in cases {
+        let path = dir.path().join("map.svg");
+        let mut all = vec!["render"];
+        all.extend(args);
+        all.extend(["-o", path.to_str().expect("utf-8")]);
+        run_ok(&db, &all);
+        let svg = std::fs::read_to_string(&path).expect("svg");
+        let (drawn, legend) = mark_classes(&svg);
+        let missing: Vec<_> = drawn.difference(&legend).collect();
+        assert!(
+            missing.is_empty(),
+            "{what}: drawn without a legend entry: {missing:?}"
+        );
+        let extra: Vec<_> = legend.difference(&drawn).collect();
+        assert!(
+            extra.is_empty(),
+            "{what}: in the legend, not drawn: {extra:?}"
+        );
+        if let Some(r) = repeat {
+            assert_eq!(svg.contains("edge walked twice"), r, "{what}");
+        }
+        if what.starts_with("office") {
+            // Footprint, rooms, walls, the elevator and the stairs, the marker and the ids.
+            for c in [
+                "outline-building",
+                "outline-room",
+                "outline-wall",
+                "lift",
+                "stairs",
+                "start-end",
+                "label",
+            ] {
+                assert!(drawn.contains(c), "{what}: no {c} drawn");
+            }
+            assert!(
+                svg.contains(">elevator to "),
+                "{what}: the elevator is called one"
+            );
+            assert!(
+                svg.contains(">stairs to "),
+                "{what}: the stairs are called stairs"
+            );
+        }
+    }
+}
