@@ -868,3 +868,113 @@ fn every_mark_on_a_map_has_its_legend_entry() {
         }
     }
 }
+
+/// Small things a user reads: a robot's plan is timed at the robot's speed (not a
+/// person's 1.2 m/s); `fit` of a building without pilot data says how to add it; the
+/// collected CSV holds numbers to the millimetre and 0.01 dB, not `4.199999999999999`.
+#[test]
+fn robot_time_fit_without_pilot_and_collected_csv_digits() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    run_ok(&db, &["import", DEMO]);
+    let demo = demo_name();
+    let out = run_ok(
+        &db,
+        &[
+            &["plan", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &["--model", "robot", "--time-limit", "0.3"],
+        ]
+        .concat(),
+    );
+    let length: f64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("length"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|l| l.parse().ok())
+        .expect("length line");
+    let secs = (length / 0.5).round() as u64;
+    assert!(
+        out.contains(&format!(
+            "about {} min {:02} s at the robot's 0.5 m/s",
+            secs / 60,
+            secs % 60
+        )) || out.contains(&format!("about {secs} s at the robot's 0.5 m/s")),
+        "{out}"
+    );
+    assert!(!out.contains("1.2 m/s"), "{out}");
+    let fast = run_ok(
+        &db,
+        &[
+            &["plan", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--model",
+                "robot",
+                "--time-limit",
+                "0.3",
+                "--robot-speed",
+                "2",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(fast.contains("at the robot's 2 m/s"), "{fast}");
+
+    // A floor plan has no pilot data: fit says how to add it.
+    let office = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/floorplans/office-l.geojson"
+    );
+    run_ok(&db, &["import-floorplan", office, "--name", "Office"]);
+    let e = run_err(&db, &["fit", "--building", "Office"]);
+    assert!(
+        e.contains("no pilot fingerprints")
+            && e.contains("trailprint pilot add \"Office\" FILE.json")
+            && e.contains("--kernel"),
+        "{e}"
+    );
+
+    // The collected fingerprints of a walk with wrong turns (estimated positions).
+    run_ok(
+        &db,
+        &[
+            &["simulate", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--surveyor",
+                "human",
+                "--deviate",
+                "0.3",
+                "--seed",
+                "3",
+                "--time-limit",
+                "0.3",
+            ],
+        ]
+        .concat(),
+    );
+    let csv = dir.path().join("c.csv");
+    run_ok(
+        &db,
+        &[
+            "export",
+            demo.as_str(),
+            "--collected",
+            "csv",
+            "-o",
+            csv.to_str().expect("utf-8"),
+        ],
+    );
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let mut rows = 0;
+    for line in text.lines().skip(1) {
+        rows += 1;
+        for (i, field) in line.split(',').enumerate().skip(3).filter(|(i, _)| *i != 5) {
+            let decimals = field.split_once('.').map_or(0, |(_, d)| d.len());
+            let most = if i <= 7 { 3 } else { 2 };
+            assert!(decimals <= most, "column {i}: {field} in {line}");
+        }
+    }
+    assert!(rows > 5, "{text}");
+}
