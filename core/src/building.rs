@@ -774,44 +774,95 @@ impl Building {
         })
     }
 
-    /// The vertex ids nearest to `id` (edit distance, ignoring case), as the tail of an
-    /// "unknown vertex" message: `; did you mean "c00" or "c01"?`, or empty when no id is
-    /// close (a typo of one or two characters, or a third of the id).
+    /// The vertex ids nearest to `id`, best first (at most three), for the "did you mean"
+    /// tail of an "unknown vertex" message; empty when no id is close.
+    ///
+    /// Ids are compared ignoring case, and also without a floor prefix (`f0-`: the
+    /// generator's and the floor-plan importer's ids are `f0-c00`, `f1-s1-23`, so `c0`
+    /// means `f0-c00`), and by their shape: the same letters with the same numbers
+    /// (`c0` and `c00`, `b5` and `b05`) is the nearest there is. A typo of one or two
+    /// characters, or of a third of the id, is close; among ids equally close those whose
+    /// numbers are nearest come first (`c16` gives `c15`), then labelled ones. A vertex
+    /// whose label is `id` is close too, and so are the vertices of a group: `r2` for
+    /// `f0-r2-door`, `f0-r2-000`.
     pub fn similar_vertex_ids(&self, id: &str) -> Vec<&str> {
-        let want: Vec<char> = id.to_lowercase().chars().collect();
-        let limit = (want.len() / 3).max(2);
-        let mut scored: Vec<(usize, &str)> = self
+        let want = IdShape::new(id);
+        let limit = (want.local.len() / 3).max(2);
+        let mut scored: Vec<(usize, u64, bool, &str)> = self
             .vertices
             .iter()
-            .map(|v| {
-                let have: Vec<char> = v.id.to_lowercase().chars().collect();
-                let d = edit_distance(&want, &have);
-                // Replacing the whole id is no near miss ("q" is not a typo of "a").
-                let whole = d >= want.len().max(have.len());
-                (if whole { usize::MAX } else { d }, v.id.as_str())
+            .filter_map(|v| {
+                let have = IdShape::new(&v.id);
+                let label = v
+                    .label
+                    .as_deref()
+                    .is_some_and(|l| l.trim().eq_ignore_ascii_case(id.trim()));
+                // "r2" for the vertices "f0-r2-000", "f0-r2-door" of room r2.
+                let group = have.local.len() > want.local.len()
+                    && have.local.starts_with(&want.local)
+                    && have.local[want.local.len()] == '-';
+                let d = if have.same_shape(&want) || label {
+                    0
+                } else if group {
+                    1
+                } else {
+                    let full = edit_distance(&want.full, &have.full);
+                    let local = edit_distance(&want.local, &have.local);
+                    // Replacing the whole id is no near miss ("q" is not a typo of "a").
+                    let whole = local >= want.local.len().max(have.local.len());
+                    if whole { usize::MAX } else { full.min(local) }
+                };
+                // Ties: the nearest numbers, then labelled vertices (a room's door).
+                (d <= limit).then(|| {
+                    (d, want.number_gap(&have), v.label.is_none(), v.id.as_str())
+                })
             })
-            .filter(|&(d, _)| d <= limit)
             .collect();
         scored.sort();
         let best = scored.first().map_or(0, |s| s.0);
-        let near: Vec<&str> = scored
+        let near: Vec<(u64, &str)> = scored
             .into_iter()
-            .filter(|&(d, _)| d == best)
-            .map(|(_, v)| v)
+            .filter(|&(d, ..)| d == best)
+            .map(|(_, gap, _, v)| (gap, v))
             .collect();
-        // Many ids equally far away (every "b.." of a corridor two edits from "c0") is
-        // no suggestion at all.
-        if near.len() > 3 && best > 1 {
+        // Many ids equally far away and none of the same letters (every "b.." of a
+        // corridor two edits from "c0") is no suggestion at all.
+        if near.len() > 3 && best > 1 && near.iter().all(|&(gap, _)| gap == u64::MAX) {
             return Vec::new();
         }
-        near.into_iter().take(3).collect()
+        near.into_iter().take(3).map(|(_, v)| v).collect()
     }
 
     fn did_you_mean(&self, id: &str) -> String {
         let near = self.similar_vertex_ids(id);
         let quoted: Vec<String> = near.iter().map(|v| format!("{v:?}")).collect();
-        match quoted.as_slice() {
-            [] => match (self.vertices.first(), self.vertices.last()) {
+        // Ids of the same letters ("c99" in a corridor "f0-c00" ... "f0-c15"): their
+        // range, unless a suggestion is the id itself but for zeros or the floor prefix.
+        let want = IdShape::new(id);
+        let exact = near.iter().any(|v| IdShape::new(v).same_shape(&want));
+        let mut alike: Vec<(Vec<u64>, &str)> = self
+            .vertices
+            .iter()
+            .filter_map(|v| {
+                let have = IdShape::new(&v.id);
+                (have.letters == want.letters).then_some((have.numbers, v.id.as_str()))
+            })
+            .collect();
+        alike.sort();
+        let range = match (alike.first(), alike.last()) {
+            _ if exact => None,
+            (Some(a), Some(b)) if alike.len() > 1 => Some(format!(
+                "the {} ids like it run from {:?} to {:?} (`trailprint vertices` lists them all)",
+                alike.len(),
+                a.1,
+                b.1
+            )),
+            (Some(a), _) => Some(format!("the one id like it is {:?}", a.1)),
+            _ => None,
+        };
+        match (quoted.as_slice(), range) {
+            ([], Some(r)) => format!("; {r}"),
+            ([], None) => match (self.vertices.first(), self.vertices.last()) {
                 (Some(a), Some(b)) if self.len() > 1 => format!(
                     "; its {} vertex ids run from {:?} to {:?}",
                     self.len(),
@@ -820,8 +871,15 @@ impl Building {
                 ),
                 _ => String::new(),
             },
-            [one] => format!("; did you mean {one}?"),
-            [init @ .., last] => format!("; did you mean {} or {last}?", init.join(", ")),
+            ([one], r) => format!(
+                "; did you mean {one}?{}",
+                r.map(|r| format!(" ({r})")).unwrap_or_default()
+            ),
+            ([init @ .., last], r) => format!(
+                "; did you mean {} or {last}?{}",
+                init.join(", "),
+                r.map(|r| format!(" ({r})")).unwrap_or_default()
+            ),
         }
     }
 
@@ -916,6 +974,93 @@ fn coordinate_ok(v: f64) -> bool {
     v.is_finite() && v.abs() <= MAX_COORDINATE
 }
 
+/// A vertex id as [`Building::similar_vertex_ids`] compares it: lower case, whole and
+/// without its floor prefix (`f0-`), and its shape: the letters with each run of digits
+/// replaced by `#`, and the numbers of those runs.
+struct IdShape {
+    full: Vec<char>,
+    local: Vec<char>,
+    letters: String,
+    numbers: Vec<u64>,
+    /// The floor of the prefix `f<n>-`, if the id has one.
+    floor: Option<u64>,
+}
+
+impl IdShape {
+    fn new(id: &str) -> IdShape {
+        let lower = id.trim().to_lowercase();
+        let local = strip_floor_prefix(&lower);
+        let mut letters = String::new();
+        let mut numbers = Vec::new();
+        let mut run = String::new();
+        for c in local.chars().chain(std::iter::once(' ')) {
+            if c.is_ascii_digit() {
+                run.push(c);
+                continue;
+            }
+            if !run.is_empty() {
+                letters.push('#');
+                numbers.push(run.parse::<u64>().unwrap_or(u64::MAX));
+                run.clear();
+            }
+            if c.is_alphanumeric() {
+                letters.push(c);
+            }
+        }
+        // "f12-c00" -> "12": what the prefix holds between its 'f' and its '-'.
+        let floor = (lower.len() - local.len())
+            .checked_sub(1)
+            .and_then(|end| lower.get(1..end))
+            .and_then(|n| n.parse().ok());
+        IdShape {
+            full: lower.chars().collect(),
+            local: local.chars().collect(),
+            letters,
+            numbers,
+            floor,
+        }
+    }
+
+    /// The same letters and the same numbers (`c0` and `f0-c00`): the same id but for
+    /// leading zeros, separators or the floor prefix.
+    fn same_shape(&self, other: &IdShape) -> bool {
+        let floors = match (self.floor, other.floor) {
+            (Some(a), Some(b)) => a == b,
+            _ => true,
+        };
+        floors
+            && !self.numbers.is_empty()
+            && self.letters == other.letters
+            && self.numbers == other.numbers
+    }
+
+    /// How far apart the numbers of two ids of the same letters are (the sum of the
+    /// differences), `u64::MAX` for ids of other letters.
+    fn number_gap(&self, other: &IdShape) -> u64 {
+        if self.letters != other.letters {
+            return u64::MAX;
+        }
+        self.numbers
+            .iter()
+            .zip(&other.numbers)
+            .map(|(a, b)| a.abs_diff(*b))
+            .fold(0u64, u64::saturating_add)
+    }
+}
+
+/// `id` without a leading floor prefix `f<digits>-` (the generator's and the importer's
+/// ids), or `id` itself.
+fn strip_floor_prefix(id: &str) -> &str {
+    let Some(rest) = id.strip_prefix('f') else {
+        return id;
+    };
+    let digits = rest.len() - rest.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+    match rest[digits..].strip_prefix('-') {
+        Some(local) if digits > 0 && !local.is_empty() => local,
+        _ => id,
+    }
+}
+
 /// Levenshtein distance of two strings (as characters).
 fn edit_distance(a: &[char], b: &[char]) -> usize {
     let mut prev: Vec<usize> = (0..=b.len()).collect();
@@ -930,10 +1075,11 @@ fn edit_distance(a: &[char], b: &[char]) -> usize {
     prev[b.len()]
 }
 
-/// Why `text` cannot be a building file at first sight (empty, or its first character
-/// cannot start a JSON document: CSV, Markdown, plain text), or `None` when JSON parsing
-/// should judge it (a `[` or `{` document; its errors carry a JSON path).
-fn not_json_object(text: &str) -> Option<String> {
+/// Why `text` cannot be a JSON file at first sight (empty, or its first character cannot
+/// start a JSON document: CSV, Markdown, plain text), or `None` when JSON parsing should
+/// judge it (a `[` or `{` document; its errors carry a JSON path). Building files, floor
+/// plans and pilot lists are refused with it.
+pub fn not_json_object(text: &str) -> Option<String> {
     let trimmed = text.trim_start_matches(['\u{feff}', ' ', '\t', '\r', '\n']);
     if trimmed.is_empty() {
         return Some("the file is empty".into());

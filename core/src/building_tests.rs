@@ -209,7 +209,7 @@ fn trailing_data_after_the_document_is_refused() {
             .to_string();
         assert!(
             e.starts_with(
-                "t.json: $: unexpected data after the JSON document (trailing characters at line"
+                "t.json: unexpected data after the JSON document (trailing characters at line"
             ),
             "{what}: {e}"
         );
@@ -265,7 +265,7 @@ fn positional_arrays_are_refused_naming_the_path() {
         .expect_err("array document")
         .to_string();
     assert!(
-        e.starts_with("t.json: $: invalid type: sequence, expected a JSON object"),
+        e.starts_with("t.json: invalid type: sequence, expected a JSON object"),
         "{e}"
     );
 }

@@ -21,7 +21,7 @@ pub enum Error {
     },
 
     /// JSON that does not parse, or does not have the expected shape.
-    #[error("{origin}: {path}: {message}")]
+    #[error("{origin}: {}{message}", at(.path))]
     Parse {
         /// File name or other origin of the text (for example `<stdin>`).
         origin: String,
@@ -31,7 +31,7 @@ pub enum Error {
     },
 
     /// A building that parses but breaks a rule of SPEC section 1 or 7.
-    #[error("{origin}: {path}: {message}")]
+    #[error("{origin}: {}{message}", at(.path))]
     InvalidBuilding {
         origin: String,
         path: String,
@@ -89,6 +89,16 @@ pub enum Error {
     /// A survey-session event that cannot be accepted in the session's state.
     #[error("session {session}: {message}")]
     Session { session: i64, message: String },
+}
+
+/// `path: ` before a message, or nothing for the document itself (`$`): the file's name
+/// already says which document.
+fn at(path: &str) -> String {
+    if path == "$" || path.is_empty() {
+        String::new()
+    } else {
+        format!("{path}: ")
+    }
 }
 
 impl Error {

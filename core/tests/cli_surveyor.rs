@@ -384,7 +384,7 @@ fn errors_say_what_would_do() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, text).expect("write");
-        let e = run_err(
+        let building = run_err(
             &db,
             &[
                 "plan",
@@ -398,15 +398,42 @@ fn errors_say_what_would_do() {
                 "5",
             ],
         );
+        let e = &building;
         assert!(
-            e.contains("not a JSON survey-building/1 file") && e.contains(begins),
+            e.contains(&format!("{name}: not a JSON survey-building/1 file")) && e.contains(begins),
             "{e}"
         );
         assert!(
             !e.contains("expected ident") && !e.contains("expected value"),
             "{e}"
         );
+        // The same files given as a floor plan or a pilot list say what they are not.
+        let file = path.to_str().expect("utf-8");
+        let plan = run_err(&db, &["import-floorplan", file]);
+        assert!(
+            plan.contains(&format!("{name}: not a GeoJSON floor plan")) && plan.contains(begins),
+            "{plan}"
+        );
+        let pilot = run_err(&db, &["pilot", "add", DEMO, file]);
+        assert!(
+            pilot.contains(&format!("{name}: not a JSON pilot list")) && pilot.contains(begins),
+            "{pilot}"
+        );
+        // JSON paths are named, the document itself (`$`) is not.
+        for e in [&building, &plan, &pilot] {
+            assert!(!e.contains("$:"), "{e}");
+        }
     }
+    // Broken JSON as a floor plan: where it breaks, without the `$` of the document.
+    let broken = dir.path().join("cut.geojson");
+    std::fs::write(&broken, "{\"type\": \"FeatureCollection\", \"features\": [").expect("write");
+    let e = run_err(&db, &["import-floorplan", broken.to_str().expect("utf-8")]);
+    assert!(
+        e.contains("cut.geojson: not a GeoJSON floor plan")
+            && e.contains("line 1")
+            && !e.contains("$:"),
+        "{e}"
+    );
     // A negative budget is a number the planner refuses, not an unknown option.
     for cmd in ["plan", "simulate"] {
         let mut args = vec![
@@ -580,4 +607,374 @@ fn team_plan_keeps_its_walks_as_plans() {
         let p = store.load_plan(*id).expect("plan");
         assert_eq!(serde_json::json!(p.record.walk), v["walks"][i]);
     }
+}
+
+/// `plan --start ID` with an id as a user types it, on the bundled buildings: the floor
+/// prefix of the generated ids left out (`c0` for `f0-c00`), leading zeros left out
+/// (`b5` for `b05`), a number past the end, a label instead of an id.
+#[test]
+fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let area_two = shared_instance("area-two.json");
+    let area_two = area_two.to_str().expect("utf-8");
+    for (building, typed, end, expect) in [
+        (DEMO, "c0", "f0-c15", "; did you mean \"f0-c00\"?"),
+        (DEMO, "C3", "f0-c15", "; did you mean \"f0-c03\"?"),
+        (DEMO, "f0-c0", "f0-c15", "; did you mean \"f0-c00\"?"),
+        (DEMO, "c16", "f0-c15", "; did you mean \"f0-c15\""),
+        (DEMO, "r2", "f0-c15", "; did you mean \"f0-r2-door\", "),
+        (DEMO, "Room 1", "f0-c15", "\"f0-r0-door\""),
+        (
+            DEMO,
+            "c99",
+            "f0-c15",
+            "; did you mean \"f0-c09\"? (the 16 ids like it run from \"f0-c00\" to \"f0-c15\"",
+        ),
+        (area_two, "b5", "t29", "; did you mean \"b05\"?"),
+        (area_two, "t3", "t29", "; did you mean \"t03\"?"),
+    ] {
+        let e = run_err(
+            &db,
+            &[
+                "plan",
+                "--building",
+                building,
+                "--start",
+                typed,
+                "--end",
+                end,
+                "--budget",
+                "30",
+            ],
+        );
+        assert!(
+            e.contains(&format!("start: unknown vertex {typed:?}")) && e.contains(expect),
+            "{typed}: {e}"
+        );
+    }
+    // The end and a walk are answered the same way.
+    let e = run_err(
+        &db,
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c00",
+            "--end",
+            "c15",
+            "--budget",
+            "30",
+        ],
+    );
+    assert!(
+        e.contains("end: unknown vertex \"c15\"") && e.contains("did you mean \"f0-c15\"?"),
+        "{e}"
+    );
+    let e = run_err(&db, &["utility", "--building", DEMO, "--walk", "c0,c1"]);
+    assert!(e.contains("did you mean \"f0-c00\"?"), "{e}");
+}
+
+/// The class tokens of an SVG's elements, split at the legend: (drawn on the floors,
+/// in the legend's swatches). Containers (`<g>`), the floor frames (`panel`), the
+/// outlines' lines redrawn over the heat map (`outline-line`), a walk's colour index
+/// (`walk-N`) and text in words (titles, "stairs to Level 1 (4 m)", "start = end": they
+/// say what they are) are left out.
+fn mark_classes(
+    svg: &str,
+) -> (
+    std::collections::BTreeSet<String>,
+    std::collections::BTreeSet<String>,
+) {
+    let legend_at = svg.find("<g class=\"legend\">").expect("a legend");
+    let classes = |part: &str| {
+        let mut out = std::collections::BTreeSet::new();
+        for tag in part.split('<').skip(1) {
+            let name = tag.split([' ', '>', '/']).next().unwrap_or("");
+            if name == "g" || name.is_empty() {
+                continue;
+            }
+            let Some(class) = tag
+                .split("class=\"")
+                .nth(1)
+                .and_then(|c| c.split('"').next())
+            else {
+                continue;
+            };
+            let text = tag.split_once('>').map_or("", |(_, t)| t);
+            if name == "text" && text.contains(' ') {
+                continue;
+            }
+            for c in class.split_whitespace() {
+                let walk_index = c
+                    .strip_prefix("walk-")
+                    .is_some_and(|n| n.parse::<u32>().is_ok());
+                let words = ["heading", "title", "subtitle", "legend-text", "heat-scale"];
+                if !(walk_index || words.contains(&c) || c == "panel" || c == "outline-line") {
+                    out.insert(c.to_string());
+                }
+            }
+        }
+        out
+    };
+    (classes(&svg[..legend_at]), classes(&svg[legend_at..]))
+}
+
+/// Every kind of mark a map draws has its legend entry, and the legend has no entry for a
+/// mark the map does not draw ("edge walked twice" only when an edge is walked twice):
+/// an imported floor plan (building footprint, rooms, walls, stairs, an elevator) with a
+/// walk that ends where it starts and vertex ids, a walk there and back and one that is
+/// not, two surveyors who share an edge and two who do not, and a session as walked.
+#[test]
+fn every_mark_on_a_map_has_its_legend_entry() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let office = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/floorplans/office-l.geojson"
+    );
+    run_ok(&db, &["import-floorplan", office, "--name", "Office"]);
+    run_ok(&db, &["import", DEMO]);
+    let demo = demo_name();
+    let out = run_ok(
+        &db,
+        &[
+            "plan",
+            "--building",
+            "Office",
+            "--start",
+            "f0-s0-1",
+            "--end",
+            "f0-s0-1",
+            "--budget",
+            "60",
+            "--kernel",
+            "40,6,9",
+            "--model",
+            "human",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let plan: serde_json::Value =
+        serde_json::from_str(out.lines().last().expect("json")).expect("plan json");
+    let plan_id = plan["plan_id"].as_i64().expect("plan id").to_string();
+    let sim = run_ok(
+        &db,
+        &[
+            &["simulate", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--surveyor",
+                "human",
+                "--deviate",
+                "0.2",
+                "--time-limit",
+                "0.3",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    let sim: serde_json::Value =
+        serde_json::from_str(sim.lines().last().expect("json")).expect("json");
+    let session = sim["session_id"].as_i64().expect("session id").to_string();
+    let cases: Vec<(&str, Vec<&str>, Option<bool>)> = vec![
+        (
+            "office, start = end, ids",
+            vec!["--plan", &plan_id, "--labels"],
+            None,
+        ),
+        (
+            "there and back",
+            vec!["--building", &demo, "--walk", "f0-c00,f0-c01,f0-c00"],
+            Some(true),
+        ),
+        (
+            "one way",
+            vec!["--building", &demo, "--walk", "f0-c00,f0-c01,f0-c02"],
+            Some(false),
+        ),
+        (
+            "team sharing an edge",
+            vec![
+                "--building",
+                &demo,
+                "--team",
+                "f0-c00,f0-c01",
+                "--team",
+                "f0-c02,f0-c01,f0-c00",
+            ],
+            Some(true),
+        ),
+        (
+            "team apart",
+            vec![
+                "--building",
+                &demo,
+                "--team",
+                "f0-c00,f0-c01",
+                "--team",
+                "f0-c03,f0-c04",
+            ],
+            Some(false),
+        ),
+        ("session", vec!["--session", &session], None),
+    ];
+    for (what, args, repeat) in cases {
+        let path = dir.path().join("map.svg");
+        let mut all = vec!["render"];
+        all.extend(args);
+        all.extend(["-o", path.to_str().expect("utf-8")]);
+        run_ok(&db, &all);
+        let svg = std::fs::read_to_string(&path).expect("svg");
+        let (drawn, legend) = mark_classes(&svg);
+        let missing: Vec<_> = drawn.difference(&legend).collect();
+        assert!(
+            missing.is_empty(),
+            "{what}: drawn without a legend entry: {missing:?}"
+        );
+        let extra: Vec<_> = legend.difference(&drawn).collect();
+        assert!(
+            extra.is_empty(),
+            "{what}: in the legend, not drawn: {extra:?}"
+        );
+        if let Some(r) = repeat {
+            assert_eq!(svg.contains("edge walked twice"), r, "{what}");
+        }
+        if what.starts_with("office") {
+            // Footprint, rooms, walls, the elevator and the stairs, the marker and the ids.
+            for c in [
+                "outline-building",
+                "outline-room",
+                "outline-wall",
+                "lift",
+                "stairs",
+                "start-end",
+                "label",
+            ] {
+                assert!(drawn.contains(c), "{what}: no {c} drawn");
+            }
+            assert!(
+                svg.contains(">elevator to "),
+                "{what}: the elevator is called one"
+            );
+            assert!(
+                svg.contains(">stairs to "),
+                "{what}: the stairs are called stairs"
+            );
+        }
+    }
+}
+
+/// Small things a user reads: a robot's plan is timed at the robot's speed (not a
+/// person's 1.2 m/s); `fit` of a building without pilot data says how to add it; the
+/// collected CSV holds numbers to the millimetre and 0.01 dB, not `4.199999999999999`.
+#[test]
+fn robot_time_fit_without_pilot_and_collected_csv_digits() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    run_ok(&db, &["import", DEMO]);
+    let demo = demo_name();
+    let out = run_ok(
+        &db,
+        &[
+            &["plan", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &["--model", "robot", "--time-limit", "0.3"],
+        ]
+        .concat(),
+    );
+    let length: f64 = out
+        .lines()
+        .find_map(|l| l.strip_prefix("length"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|l| l.parse().ok())
+        .expect("length line");
+    let secs = (length / 0.5).round() as u64;
+    assert!(
+        out.contains(&format!(
+            "about {} min {:02} s at the robot's 0.5 m/s",
+            secs / 60,
+            secs % 60
+        )) || out.contains(&format!("about {secs} s at the robot's 0.5 m/s")),
+        "{out}"
+    );
+    assert!(!out.contains("1.2 m/s"), "{out}");
+    let fast = run_ok(
+        &db,
+        &[
+            &["plan", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--model",
+                "robot",
+                "--time-limit",
+                "0.3",
+                "--robot-speed",
+                "2",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(fast.contains("at the robot's 2 m/s"), "{fast}");
+
+    // A floor plan has no pilot data: fit says how to add it.
+    let office = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/floorplans/office-l.geojson"
+    );
+    run_ok(&db, &["import-floorplan", office, "--name", "Office"]);
+    let e = run_err(&db, &["fit", "--building", "Office"]);
+    assert!(
+        e.contains("no pilot fingerprints")
+            && e.contains("trailprint pilot add \"Office\" FILE.json")
+            && e.contains("--kernel"),
+        "{e}"
+    );
+
+    // The collected fingerprints of a walk with wrong turns (estimated positions).
+    run_ok(
+        &db,
+        &[
+            &["simulate", "--building", demo.as_str()][..],
+            &corridor("40"),
+            &[
+                "--surveyor",
+                "human",
+                "--deviate",
+                "0.3",
+                "--seed",
+                "3",
+                "--time-limit",
+                "0.3",
+            ],
+        ]
+        .concat(),
+    );
+    let csv = dir.path().join("c.csv");
+    run_ok(
+        &db,
+        &[
+            "export",
+            demo.as_str(),
+            "--collected",
+            "csv",
+            "-o",
+            csv.to_str().expect("utf-8"),
+        ],
+    );
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let mut rows = 0;
+    for line in text.lines().skip(1) {
+        rows += 1;
+        for (i, field) in line.split(',').enumerate().skip(3).filter(|(i, _)| *i != 5) {
+            let decimals = field.split_once('.').map_or(0, |(_, d)| d.len());
+            let most = if i <= 7 { 3 } else { 2 };
+            assert!(decimals <= most, "column {i}: {field} in {line}");
+        }
+    }
+    assert!(rows > 5, "{text}");
 }

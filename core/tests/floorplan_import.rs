@@ -489,3 +489,196 @@ fn geo_and_outlines_are_validated() {
         );
     }
 }
+
+/// A generated office floor, drawn the way `make_fixtures.py` draws the test maps and
+/// written as an Overpass export: a corridor `length` by `width` metres with rooms
+/// north and south of it, each with a door at `door` (fraction along the side it shares
+/// with the corridor) or none (joined through the shared boundary); with `wall`, a wall
+/// along the corridor's south side (the southern rooms then all have doors); with two
+/// levels, the same corridor upstairs, joined by a stairwell room at the east end and an
+/// elevator node in the corridor's west end.
+#[derive(Debug, Clone)]
+struct GeneratedOffice {
+    length: f64,
+    width: f64,
+    north: Vec<(f64, f64, Option<f64>)>,
+    south: Vec<(f64, f64, Option<f64>)>,
+    wall: bool,
+    levels: u8,
+}
+
+impl GeneratedOffice {
+    fn geojson(&self) -> String {
+        let frame = LocalFrame::new(GeoOrigin {
+            lat: 48.8763,
+            lon: 2.3591,
+        });
+        let ll = |x: f64, y: f64| {
+            let (lon, lat) = frame.to_wgs84(x, y);
+            serde_json::json!([(lon * 1e7).round() / 1e7, (lat * 1e7).round() / 1e7])
+        };
+        let ring = |pts: &[(f64, f64)]| {
+            let mut r: Vec<_> = pts.iter().map(|&(x, y)| ll(x, y)).collect();
+            r.push(r[0].clone());
+            serde_json::json!({"type": "Polygon", "coordinates": [r]})
+        };
+        let rect = |x0: f64, y0: f64, x1: f64, y1: f64| ring(&[(x0, y0), (x1, y0), (x1, y1), (x0, y1)]);
+        let mut features = Vec::new();
+        let mut feature = |props: serde_json::Value, geometry: serde_json::Value| {
+            let id = format!("way/{}", 1000 + features.len());
+            features.push(serde_json::json!({"type": "Feature", "id": id, "properties": props, "geometry": geometry}));
+        };
+        let (l, w) = (self.length, self.width);
+        let levels: Vec<String> = (0..self.levels).map(|i| i.to_string()).collect();
+        for lvl in &levels {
+            feature(
+                serde_json::json!({"indoor": "corridor", "level": lvl, "name": format!("Corridor {lvl}")}),
+                rect(0.0, 0.0, l, w),
+            );
+            for (side, rooms) in [("N", &self.north), ("S", &self.south)] {
+                let mut x = 0.0;
+                for (i, &(width, depth, door)) in rooms.iter().enumerate() {
+                    let (y0, y1, yd) = if side == "N" {
+                        (w, w + depth, w)
+                    } else {
+                        (-depth, 0.0, 0.0)
+                    };
+                    feature(
+                        serde_json::json!({"indoor": "room", "level": lvl, "name": format!("Room {side}{i} level {lvl}")}),
+                        rect(x, y0, x + width, y1),
+                    );
+                    if let Some(t) = door {
+                        feature(
+                            serde_json::json!({"door": "hinged", "level": lvl}),
+                            serde_json::json!({"type": "Point", "coordinates": ll(x + t * width, yd)}),
+                        );
+                    }
+                    x += width;
+                }
+            }
+            if self.wall {
+                feature(
+                    serde_json::json!({"indoor": "wall", "level": lvl}),
+                    serde_json::json!({"type": "LineString", "coordinates": [ll(0.0, 0.0), ll(l, 0.0)]}),
+                );
+            }
+        }
+        if self.levels > 1 {
+            let all = levels.join(";");
+            feature(
+                serde_json::json!({"indoor": "room", "stairs": "yes", "level": all, "name": "Stairs"}),
+                rect(l, 0.0, l + 3.0, w),
+            );
+            feature(
+                serde_json::json!({"door": "hinged", "level": all}),
+                serde_json::json!({"type": "Point", "coordinates": ll(l, w / 2.0)}),
+            );
+            feature(
+                serde_json::json!({"highway": "elevator", "level": all}),
+                serde_json::json!({"type": "Point", "coordinates": ll(0.6, w / 2.0)}),
+            );
+        }
+        serde_json::json!({"type": "FeatureCollection", "generator": "overpass-turbo", "features": features})
+            .to_string()
+    }
+}
+
+/// Rooms along one side of the corridor: widths that fill at most `length`, depths, and a
+/// door (a fraction along the room's corridor side, away from its corners) or none.
+fn rooms(
+    length: f64,
+    doors_always: bool,
+) -> impl proptest::strategy::Strategy<Value = Vec<(f64, f64, Option<f64>)>> {
+    use proptest::prelude::*;
+    proptest::collection::vec(
+        (
+            1.5f64..8.0,
+            2.0f64..7.0,
+            (any::<bool>(), 0.2f64..0.8).prop_map(move |(d, t)| (d || doors_always).then_some(t)),
+        ),
+        1..6,
+    )
+    .prop_map(move |mut v| {
+        let mut x = 0.0;
+        v.retain(|r| {
+            x += r.0;
+            x <= length
+        });
+        v
+    })
+}
+
+fn generated_office() -> impl proptest::strategy::Strategy<Value = GeneratedOffice> {
+    use proptest::prelude::*;
+    (8.0f64..30.0, 1.5f64..4.0, any::<bool>(), 1u8..=2).prop_flat_map(|(length, width, wall, levels)| {
+        (rooms(length, false), rooms(length, wall)).prop_map(move |(north, south)| GeneratedOffice {
+            length,
+            width,
+            north,
+            south,
+            wall,
+            levels,
+        })
+    })
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 32, .. proptest::prelude::ProptestConfig::default() })]
+
+    /// On generated office floors (any corridor, rooms of any size with or without doors,
+    /// a wall or none, one or two levels) the import's properties hold: every vertex in
+    /// walkable space, every edge inside it or through a door (never across a wall
+    /// elsewhere), every room reached from the corridor (nothing dropped, one connected
+    /// part), levels joined at the stairs and the elevator with the documented lengths.
+    #[test]
+    fn generated_offices_import_walkable_connected_and_joined(
+        office in generated_office(),
+        spacing in proptest::sample::select(vec![1.0, 2.0, 3.0]),
+    ) {
+        let text = office.geojson();
+        let opts = ImportOptions { spacing_m: spacing, ..ImportOptions::default() };
+        let r = import_osm_text(&text, "generated.geojson", &opts).expect("imports");
+        let b = Building::from_file(r.file.clone(), "generated").expect("valid building");
+        proptest::prop_assert!(r.dropped.is_empty(), "{:?}", r.dropped);
+        proptest::prop_assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        check_walkable(&b);
+        // Every room has a vertex, and the building is one connected part.
+        for lvl in 0..office.levels {
+            for (side, rooms) in [("N", &office.north), ("S", &office.south)] {
+                for i in 0..rooms.len() {
+                    let name = format!("Room {side}{i} level {lvl}");
+                    proptest::prop_assert!(
+                        b.vertices.iter().any(|v| v.label.as_deref() == Some(name.as_str())),
+                        "{name} has no vertex"
+                    );
+                }
+            }
+        }
+        let mut seen = vec![false; b.len()];
+        let mut stack = vec![0];
+        seen[0] = true;
+        while let Some(v) = stack.pop() {
+            for &(w, _) in b.neighbours(v) {
+                if !seen[w] {
+                    seen[w] = true;
+                    stack.push(w);
+                }
+            }
+        }
+        proptest::prop_assert!(seen.iter().all(|&s| s), "not one connected part");
+        let mut vertical: Vec<(String, f64)> =
+            vertical_lengths(&b).into_iter().map(|(a, _, l)| (a, l)).collect();
+        vertical.sort_by(|a, c| a.1.total_cmp(&c.1));
+        if office.levels == 2 {
+            proptest::prop_assert_eq!(
+                vertical,
+                vec![
+                    ("stairs".to_string(), STAIRS_M_PER_LEVEL),
+                    ("elevator".to_string(), ELEVATOR_BASE_M + ELEVATOR_M_PER_LEVEL)
+                ]
+            );
+        } else {
+            proptest::prop_assert!(vertical.is_empty());
+        }
+    }
+}

@@ -88,3 +88,93 @@ fn readme_examples_run_as_written() {
     // They used the default database, which now holds what the README says.
     assert!(data.join("trailprint/trailprint.db").is_file());
 }
+
+/// The backquoted words of `text` that are written like vertex ids (letters, digits and
+/// dashes, with a digit; a trailing dash makes it a prefix of ids). Fenced blocks are left
+/// out (their fences would upset the pairing of backquotes).
+fn id_like(text: &str) -> Vec<String> {
+    let prose: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("```"))
+        .collect();
+    prose
+        .join("\n")
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|w| {
+            !w.is_empty()
+                && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '-')
+                && w.chars().any(|c| c.is_ascii_digit())
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// Each id-like word of `words` is an id of `b`, or (ending in `-`) starts some of its ids.
+fn assert_ids_exist(words: &[String], b: &trailprint::Building, context: &str) {
+    assert!(!words.is_empty(), "{context}: no ids named");
+    for w in words {
+        let found = if w.ends_with('-') {
+            b.vertices.iter().any(|v| v.id.starts_with(w.as_str()))
+        } else {
+            b.vertices.iter().any(|v| v.id == *w)
+        };
+        assert!(
+            found,
+            "{context}: the README names `{w}`, not an id of {}",
+            b.name
+        );
+    }
+}
+
+/// The vertex ids the README gives, for the bundled buildings (its table) and for an
+/// imported floor plan (its floor-plan section), are ids those buildings have, so a
+/// newcomer can type them.
+#[test]
+fn readme_vertex_ids_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("repository root");
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    let section = |title: &str| -> String {
+        let start = readme.find(title).unwrap_or_else(|| panic!("no {title:?}"));
+        let rest = &readme[start + title.len()..];
+        rest[..rest.find("\n## ").unwrap_or(rest.len())].to_string()
+    };
+    // The table: building | file | ids.
+    let table = section("## The bundled buildings and their vertex ids");
+    let mut rows = 0;
+    for row in table
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.contains(".json`"))
+    {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let file = cells[2].split('`').nth(1).expect("a file in backquotes");
+        let b = trailprint::Building::from_file(
+            serde_json::from_str(&std::fs::read_to_string(root.join(file)).expect(file))
+                .expect(file),
+            file,
+        )
+        .expect(file);
+        assert_ids_exist(&id_like(cells[3]), &b, cells[1]);
+        rows += 1;
+    }
+    assert_eq!(rows, 3, "the table's rows");
+    // The floor-plan section: ids of the office it imports.
+    let floor = section("## From a floor plan to a plan");
+    let office = trailprint::floorplan::import_path(
+        &root.join("core/tests/fixtures/floorplans/office-l.geojson"),
+        &trailprint::floorplan::ImportOptions::default(),
+    )
+    .expect("office imports");
+    let b = trailprint::Building::from_file(office.file, "Office").expect("valid");
+    let words = id_like(&floor);
+    assert!(
+        ["-s", "-d", "-e"]
+            .iter()
+            .all(|k| words.iter().any(|w| w.contains(k))),
+        "the floor-plan section explains grid, door and elevator ids: {words:?}"
+    );
+    assert_ids_exist(&words, &b, "From a floor plan to a plan");
+}

@@ -234,7 +234,7 @@ fn corrupt_or_truncated_bundles_are_rejected_and_nothing_is_imported() {
     let truncated = &good[..good.len() / 2];
     let e = refused(&x, truncated, "half.json");
     assert!(
-        e.starts_with("half.json: $: not a complete bundle (truncated or not JSON)"),
+        e.starts_with("half.json: not a complete bundle (truncated or not JSON)"),
         "{e}"
     );
     // Flip one RSS value inside the body: still valid JSON, but the checksum fails.

@@ -371,6 +371,15 @@ pub(crate) fn build(
             }
             door_touched[di] = true;
             touching.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // A door on the wall two spaces share is theirs alone: a neighbouring room
+            // whose corner is within DOOR_SNAP_M is not behind it (and, were it counted,
+            // would lose its shared-boundary joint to a door it cannot be entered by).
+            let on_wall = |&(dd, si): &(f64, usize)| {
+                dd <= SHARED_TOL_M || spaces[si].polygon.contains(&Point(d.pos))
+            };
+            if touching.iter().filter(|t| on_wall(t)).count() >= 2 {
+                touching.retain(on_wall);
+            }
             let nearest = touching[0].1;
             let pos = if spaces[nearest].polygon.contains(&Point(d.pos)) && touching.len() == 1 {
                 d.pos
@@ -385,10 +394,10 @@ pub(crate) fn build(
                 Some("door".into()),
                 format!("door {}", d.source),
             );
-            let mut joined_any = false;
+            let mut joined: Vec<usize> = Vec::new();
             for &(_, si) in &touching {
                 if connect_into(&mut net, &ctx, &spaces[si].polygon, si, v, 2) > 0 {
-                    joined_any = true;
+                    joined.push(si);
                     has_door.insert(si);
                 } else {
                     warnings.add(
@@ -397,12 +406,13 @@ pub(crate) fn build(
                     );
                 }
             }
-            for (i, &(_, a)) in touching.iter().enumerate() {
-                for &(_, b) in &touching[i + 1..] {
+            // Only spaces the door really joins skip their shared-boundary joint.
+            for (i, &a) in joined.iter().enumerate() {
+                for &b in &joined[i + 1..] {
                     door_pairs.insert((a.min(b), a.max(b)));
                 }
             }
-            if joined_any {
+            if !joined.is_empty() {
                 doors_used += 1;
             }
         }

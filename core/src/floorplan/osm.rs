@@ -147,7 +147,13 @@ pub(crate) fn read_features(
     let value: Value = serde_json::from_str(text).map_err(|e| Error::Parse {
         origin: origin.to_string(),
         path: "$".into(),
-        message: format!("not JSON: {e}"),
+        message: format!(
+            "not a GeoJSON floor plan: {} (`import-floorplan` reads OpenStreetMap indoor \
+             GeoJSON, a FeatureCollection, or an IMDF folder or .zip; pilot fingerprints are \
+             added with `trailprint pilot add NAME FILE.json`)",
+            crate::building::not_json_object(text)
+                .unwrap_or_else(|| format!("its JSON does not parse ({e})"))
+        ),
     })?;
     let list = match &value {
         Value::Object(m) if m.get("type").and_then(Value::as_str) == Some("FeatureCollection") => {

@@ -90,16 +90,43 @@ pub(super) fn outline_lines(s: &mut String, building: &Building, floor: i64, lay
     let _ = writeln!(s, "</g>");
 }
 
-/// The heat-map cells of this floor.
+/// The heat-map cells of this floor, clipped to its walkable outlines when it has any.
 pub(super) fn heat_cells(
     s: &mut String,
+    building: &Building,
     heat: &Heat,
     floor: i64,
     lay: &Layout,
     options: &RenderOptions,
 ) {
     let cell = options.grid_step_m * lay.scale;
-    let _ = writeln!(s, r#"<g class="heatmap">"#);
+    // On a floor plan, the cells are cut at the walls of the walkable outlines (cells
+    // reach half a step past them, so that they meet the walls; see `heat_grid`).
+    let walkable: Vec<_> = building
+        .outlines
+        .iter()
+        .filter(|o| {
+            o.floor == floor
+                && o.points.len() >= 3
+                && matches!(
+                    o.kind,
+                    OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area
+                )
+        })
+        .collect();
+    if walkable.is_empty() {
+        let _ = writeln!(s, r#"<g class="heatmap">"#);
+    } else {
+        let _ = write!(s, r#"<clipPath id="walkable-{floor}">"#);
+        for o in walkable {
+            let _ = write!(s, r#"<polygon points="{}"/>"#, svg_points(&o.points, lay));
+        }
+        let _ = writeln!(s, "</clipPath>");
+        let _ = writeln!(
+            s,
+            r#"<g class="heatmap" clip-path="url(#walkable-{floor})">"#
+        );
+    }
     for (p, v) in heat.grid.iter().zip(&heat.sd) {
         if p.floor != floor {
             continue;
@@ -171,8 +198,94 @@ pub(super) fn graph_labels(
     }
 }
 
-/// The ends of stairs and lifts on this floor: a ring, and "stairs to First (4 m)" where
-/// there is room for it.
+/// What joins two floors, as the vertices' labels say (an import labels its stops
+/// `elevator` and `stairs`; hand-written buildings may say nothing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum FloorLink {
+    Elevator,
+    Stairs,
+    Unknown,
+}
+
+impl FloorLink {
+    /// The link of an edge between floors, from its ends' labels.
+    pub fn of(building: &Building, a: usize, b: usize) -> FloorLink {
+        let says = |words: &[&str]| {
+            [a, b].iter().any(|&v| {
+                building.vertices[v]
+                    .label
+                    .as_deref()
+                    .map(str::to_lowercase)
+                    .is_some_and(|l| words.iter().any(|w| l.contains(w)))
+            })
+        };
+        if says(&["elevator", "lift"]) {
+            FloorLink::Elevator
+        } else if says(&["stair", "steps", "escalator", "ramp"]) {
+            FloorLink::Stairs
+        } else {
+            FloorLink::Unknown
+        }
+    }
+
+    /// Every kind of link the building has, in this order: elevator, stairs, unknown.
+    pub fn kinds(building: &Building) -> Vec<FloorLink> {
+        let mut out = Vec::new();
+        for k in [FloorLink::Elevator, FloorLink::Stairs, FloorLink::Unknown] {
+            if building.edges.iter().any(|e| {
+                building.vertices[e.a].pos.floor != building.vertices[e.b].pos.floor
+                    && FloorLink::of(building, e.a, e.b) == k
+            }) {
+                out.push(k);
+            }
+        }
+        out
+    }
+
+    /// What the map calls it ("elevator to Level 1").
+    pub fn noun(self) -> &'static str {
+        match self {
+            FloorLink::Elevator => "elevator",
+            FloorLink::Stairs => "stairs",
+            FloorLink::Unknown => "stairs or lift",
+        }
+    }
+
+    /// The ring drawn at each end, centred on (`x`, `y`), with a title: a square ring for an
+    /// elevator (class `stairs lift`), a round one for stairs.
+    pub fn ring(self, x: f64, y: f64, title: &str) -> String {
+        let title = if title.is_empty() {
+            String::new()
+        } else {
+            format!("<title>{}</title>", esc(title))
+        };
+        match self {
+            FloorLink::Elevator => format!(
+                r#"<rect class="stairs lift" x="{:.1}" y="{:.1}" width="15" height="15" rx="2">{title}</rect>"#,
+                x - 7.5,
+                y - 7.5
+            ),
+            _ => {
+                format!(r#"<circle class="stairs" cx="{x:.1}" cy="{y:.1}" r="8">{title}</circle>"#)
+            }
+        }
+    }
+}
+
+/// Whether some edge is drawn more than once (walked there and back, or by two
+/// surveyors): the walks' traversals of edges within one floor, counted over all walks.
+pub(super) fn has_repeated_edge(building: &Building, scene: &Scene) -> bool {
+    let mut seen = std::collections::HashSet::new();
+    scene.walks.iter().any(|w| {
+        w.walk.windows(2).any(|p| {
+            building.vertices[p[0]].pos.floor == building.vertices[p[1]].pos.floor
+                && !seen.insert((p[0].min(p[1]), p[0].max(p[1])))
+        })
+    })
+}
+
+/// The ends of stairs and lifts on this floor: a ring (square for an elevator), and
+/// "stairs to First (4 m)" or "elevator to First (18 m)" where there is room for it.
 pub(super) fn stairs(
     s: &mut String,
     building: &Building,
@@ -188,12 +301,14 @@ pub(super) fn stairs(
         }
         let (here, there) = if a.floor == floor { (a, b) } else { (b, a) };
         let (x, y) = (lay.px(here.x), lay.py(here.y));
-        let text = format!("stairs to {} ({:.0} m)", floor_name(there.floor), e.length);
-        let _ = writeln!(
-            s,
-            r#"<circle class="stairs" cx="{x:.1}" cy="{y:.1}" r="8"><title>{}</title></circle>"#,
-            esc(&text)
+        let kind = FloorLink::of(building, e.a, e.b);
+        let text = format!(
+            "{} to {} ({:.0} m)",
+            kind.noun(),
+            floor_name(there.floor),
+            e.length
         );
+        let _ = writeln!(s, "{}", kind.ring(x, y, &text));
         placer.block(x - 8.0, y - 8.0, 16.0, 16.0);
         if let Some((tx, ty)) = placer.place(x + 6.0, y, text.chars().count(), 10.0) {
             let _ = writeln!(
@@ -336,7 +451,8 @@ pub(super) fn markers(
             let (x, y) = (lay.px(e.x), lay.py(e.y));
             let _ = writeln!(
                 s,
-                r#"<rect class="end" x="{:.1}" y="{:.1}" width="16" height="16"><title>end: {}</title></rect>"#,
+                r#"<rect class="end{}" x="{:.1}" y="{:.1}" width="16" height="16"><title>end: {}</title></rect>"#,
+                if first == last { " start-end" } else { "" },
                 x - 8.0,
                 y - 8.0,
                 esc(&building.vertices[last].id)
@@ -355,7 +471,8 @@ pub(super) fn markers(
             let r = if first == last { 6.5 } else { 7.5 };
             let _ = writeln!(
                 s,
-                r#"<circle class="start" cx="{x:.1}" cy="{y:.1}" r="{r}"><title>start: {}</title></circle>"#,
+                r#"<circle class="start{}" cx="{x:.1}" cy="{y:.1}" r="{r}"><title>start: {}</title></circle>"#,
+                if first == last { " start-end" } else { "" },
                 esc(&building.vertices[first].id)
             );
             let _ = writeln!(

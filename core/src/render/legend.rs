@@ -3,7 +3,8 @@
 
 use std::fmt::Write as _;
 
-use super::heat::Heat;
+use super::heat::{Heat, has_walkable_outlines};
+use super::layers::{FloorLink, has_repeated_edge};
 use super::layout::{Layout, MARGIN_PX};
 use super::style::{esc, viridis, walk_colour};
 use super::{RenderOptions, Scene};
@@ -27,13 +28,17 @@ pub(super) struct Legend {
 }
 
 impl Legend {
+    /// The entries for what `render_svg` draws of `building` and `scene` with `options`
+    /// (`heat_map`: a heat map is drawn): an entry for every kind of mark, and none for a
+    /// mark the picture does not hold.
     pub fn new(
         building: &Building,
         scene: &Scene,
         width: f64,
         heat_map: bool,
-        grid_margin_m: f64,
+        options: &RenderOptions,
     ) -> Legend {
+        let grid_margin_m = options.grid_margin_m;
         let mut entries = Vec::new();
         let mut add = |swatch: String, text: String| entries.push(Entry { swatch, text });
         // Swatches are drawn around (0, 0), translated into place.
@@ -47,28 +52,45 @@ impl Legend {
                 format!("pilot fingerprint ({})", building.pilot.len()),
             );
         }
-        if building.floors.len() > 1 {
+        for kind in FloorLink::kinds(building) {
             add(
-                r#"<circle class="stairs" cx="0" cy="0" r="8"/>"#.into(),
-                "stairs or lift to another floor".into(),
+                kind.ring(0.0, 0.0, ""),
+                format!("{} to another floor (its length)", kind.noun()),
+            );
+        }
+        if options.labels {
+            add(
+                r#"<text class="label" x="-9" y="3">c03</text>"#.into(),
+                "vertex id (as `trailprint vertices` lists them)".into(),
             );
         }
         for (i, w) in scene.walks.iter().enumerate() {
             let c = walk_colour(i);
             add(
                 format!(
-                    r##"<line class="walk" stroke="{c}" x1="-10" y1="0" x2="10" y2="0"/><path fill="{c}" stroke="#222" stroke-width="0.5" d="M 5 0 L -4 -4 L -4 4 Z"/>"##
+                    r##"<line class="walk" stroke="{c}" x1="-10" y1="0" x2="10" y2="0"/><path class="arrow" fill="{c}" stroke="#222" stroke-width="0.5" d="M 5 0 L -4 -4 L -4 4 Z"/>"##
                 ),
                 w.name.clone(),
             );
         }
-        if scene.walks.iter().any(|w| has_repeat(&w.walk)) || scene.walks.len() > 1 {
+        if has_repeated_edge(building, scene) {
             add(
-                r##"<line class="walk" stroke="#e6194b" x1="-10" y1="-2.5" x2="10" y2="-2.5"/><line class="walk" stroke="#e6194b" x1="-10" y1="2.5" x2="10" y2="2.5"/>"##.into(),
-                "edge walked twice (there and back)".into(),
+                r##"<line class="walk repeat" stroke="#e6194b" x1="-10" y1="-2.5" x2="10" y2="-2.5"/><line class="walk repeat" stroke="#e6194b" x1="-10" y1="2.5" x2="10" y2="2.5"/>"##.into(),
+                if scene.walks.len() > 1 {
+                    "edge walked twice (there and back, or by two surveyors)"
+                } else {
+                    "edge walked twice (there and back)"
+                }
+                .into(),
             );
         }
-        if !scene.walks.is_empty() {
+        let ends = |same: bool| {
+            scene
+                .walks
+                .iter()
+                .any(|w| !w.walk.is_empty() && (w.walk.first() == w.walk.last()) == same)
+        };
+        if ends(false) {
             add(
                 r#"<circle class="start" cx="0" cy="0" r="7"/><text class="marker-text" x="0" y="0">S</text>"#.into(),
                 "start of the walk".into(),
@@ -77,12 +99,20 @@ impl Legend {
                 r#"<rect class="end" x="-8" y="-8" width="16" height="16"/><text class="marker-text" x="0" y="0">E</text>"#.into(),
                 "end of the walk".into(),
             );
-            if scene.walks.len() == 1 {
-                add(
-                    r#"<text class="step" x="-6" y="4">12</text>"#.into(),
-                    "step number (as in `plans show`)".into(),
-                );
-            }
+        }
+        if ends(true) {
+            add(
+                r#"<rect class="end start-end" x="-8" y="-8" width="16" height="16"/><circle class="start start-end" cx="0" cy="0" r="6.5"/><text class="marker-text" x="0" y="0">S</text>"#.into(),
+                "start = end: the walk ends where it starts".into(),
+            );
+        }
+        if let [w] = scene.walks.as_slice()
+            && w.walk.len() >= 2
+        {
+            add(
+                r#"<text class="step" x="-6" y="4">12</text>"#.into(),
+                "step number (as in `plans show`)".into(),
+            );
         }
         if !scene.track.is_empty() {
             add(
@@ -97,6 +127,7 @@ impl Legend {
             );
         }
         for (kind, text) in [
+            (OutlineKind::Building, "building footprint (not walkable)"),
             (OutlineKind::Room, "room"),
             (OutlineKind::Corridor, "corridor or open area"),
             (OutlineKind::Wall, "wall"),
@@ -108,9 +139,20 @@ impl Legend {
                     r#"<line class="outline outline-wall" x1="-9" y1="0" x2="9" y2="0"/>"#
                         .to_string()
                 } else {
+                    // One swatch for corridors and open areas (one fill), with the
+                    // classes of those drawn.
+                    let class = if kind == OutlineKind::Corridor {
+                        [OutlineKind::Corridor, OutlineKind::Area]
+                            .into_iter()
+                            .filter(|&k| building.outlines.iter().any(|o| o.kind == k))
+                            .map(|k| format!("outline-{}", k.as_str()))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    } else {
+                        format!("outline-{}", kind.as_str())
+                    };
                     format!(
-                        r#"<rect class="outline outline-{}" x="-9" y="-6" width="18" height="12"/>"#,
-                        kind.as_str()
+                        r#"<rect class="outline {class}" x="-9" y="-6" width="18" height="12"/>"#
                     )
                 };
                 add(shape, text.into());
@@ -119,7 +161,11 @@ impl Legend {
         if heat_map {
             add(
                 r#"<rect class="panel unmapped" x="-9" y="-6" width="18" height="12"/>"#.into(),
-                format!("not mapped: over {grid_margin_m} m from any edge"),
+                if has_walkable_outlines(building) {
+                    "not mapped: outside the rooms and corridors".to_string()
+                } else {
+                    format!("not mapped: over {grid_margin_m} m from any edge")
+                },
             );
         }
         let columns = (((width - 2.0 * MARGIN_PX) / ENTRY_W).floor() as usize).max(1);
@@ -175,7 +221,7 @@ impl Legend {
             let bar_y = y + 20.0;
             let _ = writeln!(
                 s,
-                r##"<rect x="{MARGIN_PX:.1}" y="{bar_y:.1}" width="{bar_w:.1}" height="12" fill="url(#sd-scale)" stroke="#888" stroke-width="0.5"/>"##
+                r##"<rect class="heat heat-scale" x="{MARGIN_PX:.1}" y="{bar_y:.1}" width="{bar_w:.1}" height="12" fill="url(#sd-scale)" stroke="#888" stroke-width="0.5"/>"##
             );
             for (t, v) in [(0.0, h.lo), (0.5, (h.lo + h.hi) / 2.0), (1.0, h.hi)] {
                 let x = MARGIN_PX + t * bar_w;
@@ -193,11 +239,15 @@ impl Legend {
             }
             let _ = writeln!(
                 s,
-                r##"<text class="subtitle" x="{:.1}" y="{:.1}">{} m grid, points within {} m of an edge</text>"##,
+                r##"<text class="subtitle" x="{:.1}" y="{:.1}">{} m grid, {}</text>"##,
                 MARGIN_PX + bar_w + 14.0,
                 bar_y + 10.0,
                 options.grid_step_m,
-                options.grid_margin_m
+                if h.outlines {
+                    "over the rooms and corridors".to_string()
+                } else {
+                    format!("points within {} m of an edge", options.grid_margin_m)
+                }
             );
             y += BAR_BLOCK_H;
         }
@@ -223,11 +273,4 @@ impl Legend {
         );
         let _ = writeln!(s, "</g>");
     }
-}
-
-/// Whether a walk goes along some edge more than once.
-fn has_repeat(walk: &[usize]) -> bool {
-    let mut seen = std::collections::HashSet::new();
-    walk.windows(2)
-        .any(|p| !seen.insert((p[0].min(p[1]), p[0].max(p[1]))))
 }

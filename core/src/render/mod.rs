@@ -8,8 +8,8 @@
 //! much wider than tall (a corridor) is cut into rows like lines of text
 //! ([`layout::Layout`]). The heat map is the latent posterior standard deviation (dB) of
 //! the GP conditioned on the pilot locations plus the samples (only positions and noise
-//! matter), on the grid of [`crate::eval::reference_grid`], coloured over the range it
-//! takes.
+//! matter), on the grid of [`crate::eval::reference_grid`] and over the walkable outlines
+//! of a floor plan, coloured over the range it takes.
 //!
 //! The SVG is plain string building: the drawing needs a few element kinds and no parsing,
 //! so a dependency would add nothing. Every element carries a `class` (`edge`, `vertex`,
@@ -110,17 +110,11 @@ impl Default for RenderOptions {
 pub fn render_svg(building: &Building, scene: &Scene, options: &RenderOptions) -> Result<String> {
     check_inputs(building, scene, options)?;
     // Room around the vertices for the markers and the heat map's half cells (the heat
-    // map covers the vertices' bounding box, SPEC section 5).
+    // map covers the vertices' bounding box, SPEC section 5, and the walkable outlines).
     let lay = Layout::new(building, 0.75, options.scale_px_per_m)?;
     let heat = Heat::compute(building, scene, options)?;
     let width = lay.width_px();
-    let legend = Legend::new(
-        building,
-        scene,
-        width,
-        heat.is_some(),
-        options.grid_margin_m,
-    );
+    let legend = Legend::new(building, scene, width, heat.is_some(), options);
     let caption_h = if scene.caption.is_some() { 18.0 } else { 0.0 };
     let floors_top = MARGIN_PX / 2.0 + HEADING_PX + caption_h;
     let legend_top = floors_top + lay.panel_h_px() * building.floors.len() as f64;

@@ -118,7 +118,7 @@ pub(super) fn floor_defs(
         );
         layers::outlines(s, building, floor.id, lay);
         if let Some(h) = heat {
-            layers::heat_cells(s, h, floor.id, lay, options);
+            layers::heat_cells(s, building, h, floor.id, lay, options);
             // Room and wall lines again over the heat map, so rooms stay visible.
             layers::outline_lines(s, building, floor.id, lay);
         }

@@ -64,7 +64,7 @@ pub(super) const CSS: &str = "\
 .edge{stroke:#555;stroke-width:2;stroke-linecap:round}\
 .vertex{fill:#fff;stroke:#333;stroke-width:1}\
 .stairs{fill:#fff;fill-opacity:0.6;stroke:#c0392b;stroke-width:2.5}\
-.stairs-text{font-size:10px;fill:#c0392b;font-weight:bold}\
+.stairs-text{font-size:10px;fill:#c0392b;font-weight:bold;stroke:#fff;stroke-width:3;paint-order:stroke;stroke-linejoin:round}\
 .pilot{fill:#e67e22;stroke:#fff;stroke-width:1}\
 .sample{fill:#fff;stroke:#111;stroke-width:0.8}\
 .walk{fill:none;stroke-width:2.5;stroke-opacity:0.9;stroke-linecap:round}\

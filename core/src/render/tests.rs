@@ -75,8 +75,13 @@ fn walk_samples_and_heat_map() {
         "one segment per step"
     );
     // c02 -> c03 -> c02: that edge is walked there and back, drawn as two lanes.
-    assert_eq!(count(&svg, " repeat\""), 2);
-    assert_eq!(count(&svg, "class=\"arrow\""), ids.len() - 1);
+    assert_eq!(count(&svg, "walk-0 repeat\""), 2);
+    assert_eq!(
+        count(&svg, "class=\"arrow\""),
+        ids.len() - 1 + 1,
+        "one per step and the legend's"
+    );
+    assert!(svg.contains("edge walked twice (there and back)"));
     assert_eq!(
         count(&svg, "class=\"sample\""),
         samples.len() + 1,
@@ -84,7 +89,7 @@ fn walk_samples_and_heat_map() {
     );
     let grid = reference_grid(&b, 0.5, 1.5);
     assert_eq!(count(&svg, "class=\"heat\""), grid.len());
-    let labels = count(&svg, "class=\"label\"");
+    let labels = count(&svg, "class=\"label\"") - 1; // the legend's
     assert!(
         labels > b.len() / 2 && labels <= b.len(),
         "{labels} vertex ids placed"
@@ -212,6 +217,84 @@ fn team_walks_get_one_colour_each() {
         style::walk_colour(1)
     )));
     assert!(svg.contains(">S1</text>") && svg.contains(">E2</text>"));
-    // f0-c01 - f0-c02 is walked by both: two lanes.
-    assert_eq!(count(&svg, " repeat\""), 2);
+    // f0-c01 - f0-c02 is walked by both: two lanes, and the legend says so.
+    assert_eq!(
+        count(&svg, "walk-0 repeat\"") + count(&svg, "walk-1 repeat\""),
+        2
+    );
+    assert!(svg.contains("edge walked twice (there and back, or by two surveyors)"));
+}
+
+/// An imported floor plan's heat map covers its rooms, corridors and stairwells whole,
+/// not only within 1.5 m of an edge and the vertices' bounding box (which left holes of
+/// room colour in the middle of rooms and a strip along the walls).
+#[test]
+fn heat_map_covers_the_walkable_outlines() {
+    use geo::{Contains, Coord, LineString, Polygon};
+    let office = crate::floorplan::import_path(
+        std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/floorplans/office-l.geojson"
+        )),
+        &crate::floorplan::ImportOptions::default(),
+    )
+    .expect("office imports");
+    let b = Building::from_file(office.file, "office").expect("valid");
+    let options = RenderOptions::default();
+    let step = options.grid_step_m;
+    let grid = heat::heat_grid(&b, step, options.grid_margin_m);
+    let mut checked = 0;
+    for o in b.outlines.iter().filter(|o| {
+        matches!(
+            o.kind,
+            crate::building::OutlineKind::Room
+                | crate::building::OutlineKind::Corridor
+                | crate::building::OutlineKind::Area
+        )
+    }) {
+        let ring: Vec<Coord<f64>> = o
+            .points
+            .iter()
+            .map(|p| Coord { x: p[0], y: p[1] })
+            .collect();
+        let poly = Polygon::new(LineString::from(ring), vec![]);
+        let (x0, x1, y0, y1) = o.points.iter().fold(
+            (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ),
+            |(a, b, c, d), p| (a.min(p[0]), b.max(p[0]), c.min(p[1]), d.max(p[1])),
+        );
+        // Every point of a fine lattice inside the outline is within a heat cell.
+        let mut y = y0 + 0.1;
+        while y < y1 {
+            let mut x = x0 + 0.1;
+            while x < x1 {
+                if poly.contains(&Coord { x, y }) {
+                    checked += 1;
+                    assert!(
+                        grid.iter().any(|g| g.floor == o.floor
+                            && (g.x - x).abs() <= step / 2.0 + 1e-9
+                            && (g.y - y).abs() <= step / 2.0 + 1e-9),
+                        "{:?} at ({x:.1}, {y:.1}) floor {}: no heat cell",
+                        o.name,
+                        o.floor
+                    );
+                }
+                x += 0.3;
+            }
+            y += 0.3;
+        }
+    }
+    assert!(checked > 1000, "{checked} points checked");
+    // And the picture draws one cell per grid point.
+    let scene = Scene {
+        kernel: Some(Kernel::new(40.0, 6.0, 9.0)),
+        ..Scene::default()
+    };
+    let svg = render_svg(&b, &scene, &options).expect("svg");
+    assert_eq!(count(&svg, "class=\"heat\""), grid.len());
+    assert!(svg.contains("0.5 m grid, over the rooms and corridors"));
 }

@@ -13,8 +13,9 @@ pub const COLLECTED_FORMAT: &str = "survey-collected/1";
 
 /// Wide CSV, one row per fingerprint: `session,seq,at_ms,x,y,floor,sigma_m,since_checkin_m`,
 /// then one column per access point heard anywhere in `list` (sorted by name), empty where
-/// it was not heard. Fields are quoted per RFC 4180 when needed; numbers are written in
-/// Rust's shortest round-trip form, so nothing is lost.
+/// it was not heard. Fields are quoted per RFC 4180 when needed; positions and distances
+/// are written to the millimetre and RSS to 0.01 dB (finer digits are arithmetic noise of
+/// the estimated track, `4.199999999999999`, not measurement), in shortest form.
 pub fn collected_csv(list: &[StoredCollected]) -> String {
     let aps: BTreeSet<&str> = list
         .iter()
@@ -46,23 +47,30 @@ pub fn collected_csv(list: &[StoredCollected]) -> String {
             c.session_id,
             c.seq,
             c.at_ms,
-            fp.x,
-            fp.y,
+            rounded(fp.x, 3),
+            rounded(fp.y, 3),
             fp.floor,
-            fp.sigma_m,
+            rounded(fp.sigma_m, 3),
             fp.since_checkin_m
-                .map(|u| format!("{u:?}"))
+                .map(|u| format!("{:?}", rounded(u, 3)))
                 .unwrap_or_default()
         );
         for ap in &aps {
             out.push(',');
             if let Some(rss) = fp.rss.get(*ap) {
-                let _ = write!(out, "{rss:?}");
+                let _ = write!(out, "{:?}", rounded(*rss, 2));
             }
         }
         out.push_str("\r\n");
     }
     out
+}
+
+/// `v` rounded to `decimals` places: the double nearest the decimal, so that it prints as
+/// that decimal (`4.199999999999999` -> `4.2`); never `-0.0`.
+fn rounded(v: f64, decimals: i32) -> f64 {
+    let f = 10f64.powi(decimals);
+    (v * f).round() / f + 0.0
 }
 
 /// Quotes a CSV field if it holds a comma, a quote or a line break (RFC 4180); the one rule

@@ -1,9 +1,9 @@
 //! `trailprint fit`: the kernel hyperparameters of SPEC section 2.
 
 use clap::Args as ClapArgs;
-use trailprint::Result;
 use trailprint::gp::fit_kernel;
 use trailprint::store::{FitRecord, now_ms};
+use trailprint::{Error, Result};
 
 use crate::opts::{BuildingOpts, json_line};
 
@@ -18,6 +18,15 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = a.building.load(db)?;
+    if b.pilot.is_empty() {
+        // An imported floor plan has none: say how to add them, or how to do without.
+        return Err(Error::InvalidRequest(format!(
+            "{:?} has no pilot fingerprints to fit the kernel on: add them with \
+             `trailprint pilot add {:?} FILE.json` (a JSON list of {{\"x\", \"y\", \"floor\", \
+             \"rss\"}}), or plan with `--kernel SF2,ELL,SN2`",
+            b.name, b.name
+        )));
+    }
     let fit = fit_kernel(&b.pilot)?;
     // A building of the database keeps its fit there (`trailprint buildings` counts it;
     // `demo` reuses the latest); a file has nowhere to keep it.

@@ -44,8 +44,17 @@ fn read_pilot(path: &Path) -> Result<Vec<Fingerprint>> {
         path,
         message,
     };
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| parse_err("$".into(), format!("not JSON: {e}")))?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        let what = trailprint::building::not_json_object(&text)
+            .unwrap_or_else(|| format!("its JSON does not parse ({e})"));
+        parse_err(
+            "$".into(),
+            format!(
+                "not a JSON pilot list: {what} (a JSON array of {{\"x\", \"y\", \"floor\", \
+                 \"rss\": {{AP: dBm}}}}, or a building file's {{\"pilot\": [...]}})"
+            ),
+        )
+    })?;
     let (list, prefix) = match value {
         serde_json::Value::Array(_) => (value, ""),
         serde_json::Value::Object(mut m) => match m.remove("pilot") {

@@ -62,6 +62,9 @@ pub struct Args {
     /// guidance) instead of the table of steps.
     #[arg(long)]
     instructions: bool,
+    /// Robot: its speed, m/s, for the time of its walk (a human's is `--speed`).
+    #[arg(long, value_name = "M_PER_S", default_value_t = crate::walk_text::ROBOT_SPEED_M_S)]
+    robot_speed: f64,
     /// Print the result as one JSON object.
     #[arg(long)]
     json: bool,
@@ -180,7 +183,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             &r.walk_indices,
             r.length_m,
             &model,
-            a.model.speed,
+            a.robot_speed,
             a.instructions,
         );
         if let Some(id) = plan_id {

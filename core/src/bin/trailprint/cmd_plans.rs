@@ -35,8 +35,8 @@ struct ShowArgs {
     /// Print the turn-by-turn sheet instead of the table of steps.
     #[arg(long)]
     instructions: bool,
-    /// Walking speed used for the time of a robot's plan, m/s (a human plan uses its own).
-    #[arg(long, default_value_t = 1.2)]
+    /// Robot: its speed, m/s, for the time of a robot's plan (a human plan uses its own).
+    #[arg(long = "robot-speed", alias = "speed", value_name = "M_PER_S", default_value_t = crate::walk_text::ROBOT_SPEED_M_S)]
     speed: f64,
     /// Print the stored plan as one JSON object.
     #[arg(long)]
@@ -245,7 +245,7 @@ fn show(a: &ShowArgs, db: Option<&Path>) -> Result<()> {
     }
     if !(a.speed.is_finite() && a.speed > 0.0) {
         return Err(Error::InvalidRequest(format!(
-            "--speed must be a positive number of m/s, got {}",
+            "--robot-speed must be a positive number of m/s, got {}",
             a.speed
         )));
     }

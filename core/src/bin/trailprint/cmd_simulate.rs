@@ -76,7 +76,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0.05)]
     stride_noise: f64,
     /// Robot: speed, m/s.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = crate::walk_text::ROBOT_SPEED_M_S)]
     robot_speed: f64,
     /// Seconds the surveyor stands at each check-in (the phone keeps scanning).
     #[arg(long, value_name = "SECONDS", default_value_t = 2.0)]

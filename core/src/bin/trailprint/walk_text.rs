@@ -213,12 +213,16 @@ pub fn model_text(model: &SurveyorModel) -> String {
     }
 }
 
-/// The walking speed of the model (a human's own); a robot's walk is timed at
-/// `fallback_speed` (the `--speed` option, default 1.2 m/s), the pace of whoever follows it.
-pub fn walking_speed(model: &SurveyorModel, fallback_speed: f64) -> f64 {
+/// A survey robot's speed, m/s, unless `--robot-speed` says otherwise (`simulate` drives
+/// its robot at it, `plan` and `plans show` time a robot's walk with it).
+pub const ROBOT_SPEED_M_S: f64 = 0.5;
+
+/// The speed a walk is timed at: a human's own, or for a robot `robot_speed` (the
+/// `--robot-speed` option, default [`ROBOT_SPEED_M_S`]).
+pub fn walking_speed(model: &SurveyorModel, robot_speed: f64) -> f64 {
     match *model {
         SurveyorModel::Human { speed, .. } => speed,
-        SurveyorModel::Robot { .. } => fallback_speed,
+        SurveyorModel::Robot { .. } => robot_speed,
     }
 }
 
@@ -239,7 +243,10 @@ pub fn time_text(
             duration_text(walking),
             duration_text(walking + 2.0 * checks as f64)
         ),
-        SurveyorModel::Robot { .. } => format!("about {} at {speed} m/s", duration_text(walking)),
+        SurveyorModel::Robot { .. } => format!(
+            "about {} at the robot's {speed} m/s (--robot-speed)",
+            duration_text(walking)
+        ),
     }
 }
 
@@ -250,10 +257,10 @@ pub fn print_walk(
     walk: &[usize],
     length_m: f64,
     model: &SurveyorModel,
-    fallback_speed: f64,
+    robot_speed: f64,
     instructions_sheet: bool,
 ) {
-    let speed = walking_speed(model, fallback_speed);
+    let speed = walking_speed(model, robot_speed);
     println!(
         "time          {}",
         time_text(b, walk, length_m, model, speed)
