@@ -129,8 +129,8 @@ fn fuzz_session(
 }
 
 /// Event times at the ends of `i64` (the `session` target sends `i64::MIN` and `i64::MAX`):
-/// a first event at `i64::MIN` was accepted, and the active time of any later event, `last
-/// - first`, overflowed (a panic with overflow checks, a negative time without). Times are
+/// a first event at `i64::MIN` was accepted, and the active time of any later event,
+/// `last - first`, overflowed (a panic with overflow checks, a negative time without). Times are
 /// now bounded by `MAX_EVENT_T_MS` (0 to early 2070): one outside is refused, naming the
 /// field and the bound, and changes neither the session nor its log; the bound itself is
 /// accepted, and the active time from 0 to it is exact.
@@ -275,7 +275,11 @@ fn replay_session_fixture(name: &str) {
         let before_len = log.events(id).unwrap().len();
         let ended = matches!(s.status(), SessionStatus::Finished | SessionStatus::Aborted);
         match op {
-            Op::Replan(_) => {
+            Op::Replan(word) => {
+                assert_eq!(
+                    word, "replan",
+                    "{name}: op {i} is neither an event nor \"replan\""
+                );
                 if s.replan().is_err() {
                     assert_eq!(
                         before,
