@@ -392,3 +392,26 @@ fn a_unit_stretched_two_degrees_imports_in_bounded_time() {
         }
     }
 }
+
+/// An OSM input of `floorplan_osm` that timed out in the same place (`bridge`, over 100 s
+/// under the sanitizer): it is imported or refused within the same bound, and an accepted
+/// plan is a building the validator takes.
+#[test]
+fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
+    use trailprint::Building;
+
+    let name = "osm-timeout-f58c5975.geojson";
+    let input = text(name);
+    let result = within(60, move || {
+        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    });
+    match result {
+        Ok(imp) => {
+            let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+                panic!("{name}: the importer wrote a building the validator refuses: {e}")
+            });
+            assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+        }
+        Err(e) => assert!(e.to_string().contains("fuzz.geojson"), "{name}: {e}"),
+    }
+}
