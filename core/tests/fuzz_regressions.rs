@@ -332,3 +332,86 @@ fn session_seed_once_committed_as_crash_209ed65f_replays_cleanly() {
 fn session_seed_once_committed_as_crash_32c3a55e_replays_cleanly() {
     replay_session_fixture("session-32c3a55e.json");
 }
+
+/// An IMDF input of the `floorplan_imdf` target (the files NUL-separated, in the target's
+/// order) as the importer's file map.
+fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
+    const FILES: [&str; 7] = [
+        "level.geojson",
+        "unit.geojson",
+        "opening.geojson",
+        "amenity.geojson",
+        "relationship.geojson",
+        "venue.geojson",
+        "building.geojson",
+    ];
+    let bytes = std::fs::read(fixture(name)).expect(name);
+    FILES
+        .iter()
+        .zip(bytes.split(|&b| b == 0))
+        .filter(|(_, part)| !part.is_empty())
+        .map(|(f, part)| (f.to_string(), String::from_utf8(part.to_vec()).expect(name)))
+        .collect()
+}
+
+/// The mall fixture with one unit's corner moved two degrees of longitude east (146 km) by
+/// a mutation (found by `floorplan_imdf`, 14 timeouts in 20 minutes: over 120 s for `-a`,
+/// 23 s for `-b`, under the sanitizer). The unit became a sliver whose grid fell into
+/// thousands of parts, and joining them read every edge of the floor again for each join.
+/// Now the parts are tracked as they are joined, the 400 closest pairs kept in a heap, and
+/// the pairs measured per space bounded (`BRIDGE_MAX_PAIRS`): the plan imports in seconds,
+/// a valid building of its largest connected part, and the parts left apart are reported.
+#[test]
+fn a_unit_stretched_two_degrees_imports_in_bounded_time() {
+    use trailprint::Building;
+    use trailprint::floorplan::import_imdf_files;
+
+    for name in [
+        "imdf-unit-two-degrees-long-a.bin",
+        "imdf-unit-two-degrees-long-b.bin",
+    ] {
+        let files = imdf_files(name);
+        let imp = within(60, move || {
+            import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+        })
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+            panic!("{name}: the importer wrote a building the validator refuses: {e}")
+        });
+        assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+        assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+        assert!(
+            !imp.dropped.is_empty(),
+            "{name}: the rooms cut off by the sliver are reported"
+        );
+        for part in &imp.dropped {
+            assert!(
+                part.vertices > 0 && !part.spaces.is_empty(),
+                "{name}: {part}"
+            );
+        }
+    }
+}
+
+/// An OSM input of `floorplan_osm` that timed out in the same place (`bridge`, over 100 s
+/// under the sanitizer): it is imported or refused within the same bound, and an accepted
+/// plan is a building the validator takes.
+#[test]
+fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
+    use trailprint::Building;
+
+    let name = "osm-timeout-f58c5975.geojson";
+    let input = text(name);
+    let result = within(60, move || {
+        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    });
+    match result {
+        Ok(imp) => {
+            let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+                panic!("{name}: the importer wrote a building the validator refuses: {e}")
+            });
+            assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+        }
+        Err(e) => assert!(e.to_string().contains("fuzz.geojson"), "{name}: {e}"),
+    }
+}

@@ -878,57 +878,107 @@ fn fill_gaps(
     }
 }
 
+/// Most vertex pairs [`bridge`] measures for one space, over all its joins: 50,000,000 (one
+/// join of two halves of a 14,000-vertex space, a hall of about 5 hectares at 2 m). A
+/// space in so many parts that joining them would take more (a sliver kilometres long from
+/// a typo in a coordinate: found by the `floorplan_imdf` fuzz target, over 120 s) keeps the
+/// parts not yet joined; those no door joins later are dropped and reported
+/// ([`DroppedPart`]) like any other part.
+pub(crate) const BRIDGE_MAX_PAIRS: usize = 50_000_000;
+
 /// Joins the parts of one space's network that the grid left apart, each time by the
-/// closest pair in sight (up to 400 pairs tried per join).
+/// closest pair in sight (up to 400 pairs tried per join) between the part of the space's
+/// first vertex and the rest, until one part is left, no pair in sight joins, or
+/// [`BRIDGE_MAX_PAIRS`] pairs have been measured.
 fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]) {
+    /// Pairs tried per join, closest first.
+    const TRIED: usize = 400;
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
     if mine.len() < 2 {
         return;
     }
     let local: HashMap<usize, usize> = mine.iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    // Parts of the space's vertices over its edges so far; each join below merges two (the
+    // edges were read again for every join, which a space in thousands of parts made
+    // quadratic in the whole floor's edges).
+    let mut parent: Vec<usize> = (0..mine.len()).collect();
+    for &(a, b, _) in &net.edges {
+        if let (Some(&ia), Some(&ib)) = (local.get(&a), local.get(&b)) {
+            let (ra, rb) = (find(&mut parent, ia), find(&mut parent, ib));
+            parent[ra] = rb;
+        }
+    }
+    let mut measured = 0usize;
     loop {
-        // Components of the space's vertices over the edges so far.
-        let mut parent: Vec<usize> = (0..mine.len()).collect();
-        fn find(p: &mut [usize], mut x: usize) -> usize {
-            while p[x] != x {
-                p[x] = p[p[x]];
-                x = p[x];
-            }
-            x
-        }
-        for &(a, b, _) in &net.edges {
-            if let (Some(&ia), Some(&ib)) = (local.get(&a), local.get(&b)) {
-                let (ra, rb) = (find(&mut parent, ia), find(&mut parent, ib));
-                parent[ra] = rb;
-            }
-        }
         let root0 = find(&mut parent, 0);
-        let mut cross: Vec<(f64, usize, usize)> = Vec::new();
-        for i in 0..mine.len() {
-            if find(&mut parent, i) != root0 {
-                continue;
-            }
-            for j in 0..mine.len() {
-                if find(&mut parent, j) == root0 {
-                    continue;
-                }
-                cross.push((dist(net.verts[mine[i]].pos, net.verts[mine[j]].pos), i, j));
-            }
-        }
-        if cross.is_empty() {
+        let inside: Vec<bool> = (0..mine.len())
+            .map(|i| find(&mut parent, i) == root0)
+            .collect();
+        let n_in = inside.iter().filter(|&&x| x).count();
+        let pairs = n_in * (mine.len() - n_in);
+        if pairs == 0 || measured.saturating_add(pairs) > BRIDGE_MAX_PAIRS {
             return;
         }
-        cross.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut joined = false;
-        for &(_, i, j) in cross.iter().take(400) {
+        measured += pairs;
+        // The `TRIED` closest pairs, ties in the order (i, j): a bounded heap whose top is
+        // the farthest kept, instead of sorting every pair (memory stays at `TRIED`).
+        let mut best: std::collections::BinaryHeap<(ByDist, usize, usize)> =
+            std::collections::BinaryHeap::with_capacity(TRIED + 1);
+        for i in (0..mine.len()).filter(|&i| inside[i]) {
+            let pi = net.verts[mine[i]].pos;
+            for j in (0..mine.len()).filter(|&j| !inside[j]) {
+                let item = (ByDist(dist(pi, net.verts[mine[j]].pos)), i, j);
+                if best.len() < TRIED {
+                    best.push(item);
+                } else if best.peek().is_some_and(|top| item < *top) {
+                    best.pop();
+                    best.push(item);
+                }
+            }
+        }
+        let mut joined = None;
+        for (_, i, j) in best.into_sorted_vec() {
             let (a, b) = (net.verts[mine[i]].pos, net.verts[mine[j]].pos);
             if segment_within(poly, a, b, 0.0) && ctx.walls_ok(net, a, b) {
                 net.edge(mine[i], mine[j], None);
-                joined = true;
+                joined = Some((i, j));
                 break;
             }
         }
-        if !joined {
+        let Some((i, j)) = joined else {
             return;
-        }
+        };
+        let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
+        parent[ri] = rj;
+    }
+}
+
+/// A distance ordered by [`f64::total_cmp`], for the heap of [`bridge`].
+#[derive(Clone, Copy, Debug)]
+struct ByDist(f64);
+
+impl PartialEq for ByDist {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.total_cmp(&other.0).is_eq()
+    }
+}
+
+impl Eq for ByDist {}
+
+impl PartialOrd for ByDist {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for ByDist {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
     }
 }
