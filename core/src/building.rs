@@ -813,9 +813,7 @@ impl Building {
                     if whole { usize::MAX } else { full.min(local) }
                 };
                 // Ties: the nearest numbers, then labelled vertices (a room's door).
-                (d <= limit).then(|| {
-                    (d, want.number_gap(&have), v.label.is_none(), v.id.as_str())
-                })
+                (d <= limit).then(|| (d, want.number_gap(&have), v.label.is_none(), v.id.as_str()))
             })
             .collect();
         scored.sort();

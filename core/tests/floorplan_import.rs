@@ -522,7 +522,8 @@ impl GeneratedOffice {
             r.push(r[0].clone());
             serde_json::json!({"type": "Polygon", "coordinates": [r]})
         };
-        let rect = |x0: f64, y0: f64, x1: f64, y1: f64| ring(&[(x0, y0), (x1, y0), (x1, y1), (x0, y1)]);
+        let rect =
+            |x0: f64, y0: f64, x1: f64, y1: f64| ring(&[(x0, y0), (x1, y0), (x1, y1), (x0, y1)]);
         let mut features = Vec::new();
         let mut feature = |props: serde_json::Value, geometry: serde_json::Value| {
             let id = format!("way/{}", 1000 + features.len());
@@ -610,16 +611,20 @@ fn rooms(
 
 fn generated_office() -> impl proptest::strategy::Strategy<Value = GeneratedOffice> {
     use proptest::prelude::*;
-    (8.0f64..30.0, 1.5f64..4.0, any::<bool>(), 1u8..=2).prop_flat_map(|(length, width, wall, levels)| {
-        (rooms(length, false), rooms(length, wall)).prop_map(move |(north, south)| GeneratedOffice {
-            length,
-            width,
-            north,
-            south,
-            wall,
-            levels,
-        })
-    })
+    (8.0f64..30.0, 1.5f64..4.0, any::<bool>(), 1u8..=2).prop_flat_map(
+        |(length, width, wall, levels)| {
+            (rooms(length, false), rooms(length, wall)).prop_map(move |(north, south)| {
+                GeneratedOffice {
+                    length,
+                    width,
+                    north,
+                    south,
+                    wall,
+                    levels,
+                }
+            })
+        },
+    )
 }
 
 proptest::proptest! {
