@@ -16,6 +16,13 @@ step() {
   echo "== $name"
   if ! "$@" 2>&1 | tee -a "$LOG"; then failed+=("$name"); fi
 }
+# Formatting first (a second): unformatted code fails the run, as a reviewer would. Skipped
+# with a message where the toolchain has no rustfmt component.
+if cargo fmt --version >/dev/null 2>&1; then
+  step "Rust: cargo fmt --all -- --check" cargo fmt --all -- --check
+else
+  echo "== Rust: formatting not checked (no rustfmt; rustup component add rustfmt)"
+fi
 # Examples are compiled with the tests (they hold no tests, so nothing runs): they must
 # keep compiling, and running them is the benchmarks' job, not CI's.
 step "Rust: cargo test --workspace (unit, integration, binaries, examples compile)" \
