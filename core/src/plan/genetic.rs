@@ -248,19 +248,28 @@ impl<'p> Fitness<'p> {
             .collect();
         todo.sort_unstable();
         todo.dedup();
-        // Chunks of two walks per thread: the deadline is checked between chunks, and on a
-        // large building one walk costs tens of milliseconds.
+        // Chunks of two walks per thread, and every walk checks for a stop before it is
+        // evaluated: on a large building one walk costs tens of milliseconds, and where the
+        // thread pool is larger than the cores a process really gets (a CPU quota), a whole
+        // chunk can take far longer than its walks' sum. So a cancel waits for at most the
+        // one walk each thread is evaluating.
         let chunk_len = (2 * rayon::current_num_threads()).max(2);
         for chunk in todo.chunks(chunk_len) {
             run.check()?;
             if run.out_of_time() {
                 break;
             }
-            let us: Vec<Result<f64>> = chunk.par_iter().map(|w| self.p.utility(w)).collect();
+            let us: Vec<Option<Result<f64>>> = chunk
+                .par_iter()
+                .map(|w| (!run.should_stop()).then(|| self.p.utility(w)))
+                .collect();
             for (w, u) in chunk.iter().zip(us) {
-                self.cache.insert((*w).clone(), u?);
+                if let Some(u) = u {
+                    self.cache.insert((*w).clone(), u?);
+                }
             }
         }
+        run.check()?;
         Ok(walks.iter().map(|w| self.cache.get(w).copied()).collect())
     }
 }
