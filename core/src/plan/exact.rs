@@ -354,6 +354,15 @@ impl Solver for Exact {
         let results: Vec<Result<()>> = tasks
             .par_iter()
             .map(|t| {
+                // A subtree starts with no node counted, so its first check would come
+                // only after 256 nodes: after a cancel or the limit, every subtree still
+                // queued would search that far first (hundreds of milliseconds on a
+                // loaded machine). Check before starting one.
+                run.check()?;
+                if sh.timed_out.load(Ordering::Relaxed) || run.out_of_time() {
+                    sh.timed_out.store(true, Ordering::Relaxed);
+                    return Ok(());
+                }
                 let mut st = p.engine.start(p.start)?;
                 for &v in &t.walk[1..] {
                     st.push(v)?;

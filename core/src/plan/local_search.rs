@@ -270,10 +270,16 @@ impl LocalSearch {
                 break;
             }
             evals += moves.len();
+            // After a cancel the batch's remaining moves are skipped (a batch is tens of
+            // milliseconds on a large building, several times that on a loaded machine).
             let us: Vec<Result<f64>> = moves
                 .par_iter()
-                .map(|m| pre.eval(m.keep, &m.walk[m.keep + 1..]))
+                .map(|m| {
+                    run.check()?;
+                    pre.eval(m.keep, &m.walk[m.keep + 1..])
+                })
                 .collect();
+            run.check()?;
             let mut best: Option<(usize, f64)> = None;
             for (k, u) in us.into_iter().enumerate() {
                 let u = u?;

@@ -249,8 +249,9 @@ fn best_so_far(problem: &Problem, run: &Run, termination: Termination) -> Result
 
 /// Estimated peak working set of planning `req` on `building` with `prior` extra
 /// observations, in bytes: the shortest-path table (12 bytes per vertex pair), the engine's
-/// vertex covariance and its factor (two `|V| x |V|` matrices), the pilot rows, and per
-/// planning thread one dense matrix of `[pilot + prior, samples of a full-budget walk,
+/// vertex covariance and its factor (two `|V| x |V|` matrices; a third, the posterior of
+/// the pilot data, for the planners that grow walks incrementally), the pilot rows, and
+/// per planning thread one dense matrix of `[pilot + prior, samples of a full-budget walk,
 /// vertices]` plus the incremental rows of such a walk.
 pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> u64 {
     let nv = building.len() as f64;
@@ -262,14 +263,15 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     };
     let ns = budget / req.model.spacing().max(1e-3) + 2.0;
     let metric = 12.0 * nv * nv;
-    let engine = 8.0 * (2.0 * nv * nv + nd * nd + 2.0 * nd * nv);
     let n = nd + ns + nv + 16.0;
     let threads = rayon::current_num_threads().max(1) as f64;
     // The large-building search (auto and coverage beyond `auto::LARGE_VERTICES`) only
     // evaluates whole walks; the other planners also grow walks incrementally (rows of
-    // `L` and `W` per sample).
+    // `L` and `W` per sample, from the engine's posterior of the pilot data).
     let whole_walks = matches!(req.algorithm, Algorithm::Auto | Algorithm::Coverage)
         && building.len() > auto::LARGE_VERTICES;
+    let vertex_matrices = if whole_walks { 2.0 } else { 3.0 };
+    let engine = 8.0 * (vertex_matrices * nv * nv + nd * nd + 2.0 * nd * nv);
     let incremental = if whole_walks {
         0.0
     } else {

@@ -26,6 +26,7 @@ fn check_isa(kind: IsaKind) {
     check_kernels(v);
     dense::tests::check(isa);
     dense::tests::check_indefinite(isa);
+    dense::tests::check_known(isa);
     engine::tests::check(isa);
 }
 
