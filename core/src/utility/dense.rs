@@ -554,6 +554,19 @@ pub(crate) mod tests {
         (a, m, layout)
     }
 
+    /// The upper factor in `a` is nalgebra's `L^T` of `m`.
+    fn assert_factor(a: &[f64], layout: Layout, m: &nalgebra::DMatrix<f64>, what: &str) {
+        let l = m.clone().cholesky().expect("pd").l();
+        for i in 0..layout.n {
+            for j in i..layout.n {
+                assert!(
+                    (a[i * layout.ld + j] - l[(j, i)]).abs() < 1e-9,
+                    "{what} U[{i}][{j}]"
+                );
+            }
+        }
+    }
+
     fn schur_logdet(m: &nalgebra::DMatrix<f64>, from: usize) -> f64 {
         let full = m.clone().cholesky().expect("pd").ln_determinant();
         if from == 0 {
@@ -583,15 +596,7 @@ pub(crate) mod tests {
                     "{isa:?} n={n} from={from}: {got} vs {want}"
                 );
                 // The factor itself matches nalgebra's L^T.
-                let l = m.clone().cholesky().expect("pd").l();
-                for i in 0..n {
-                    for j in i..n {
-                        assert!(
-                            (a[i * layout.ld + j] - l[(j, i)]).abs() < 1e-9,
-                            "{isa:?} n={n} U[{i}][{j}]"
-                        );
-                    }
-                }
+                assert_factor(&a, layout, &m, &format!("{isa:?} n={n}"));
             }
         }
     }
@@ -613,15 +618,7 @@ pub(crate) mod tests {
                 (got - want).abs() <= 1e-10 * want.abs().max(1.0),
                 "{isa:?} n={n} known={known}: {got} vs {want}"
             );
-            let l = m.clone().cholesky().expect("pd").l();
-            for i in 0..n {
-                for j in i..n {
-                    assert!(
-                        (a[i * layout.ld + j] - l[(j, i)]).abs() < 1e-9,
-                        "{isa:?} n={n} known={known} U[{i}][{j}]"
-                    );
-                }
-            }
+            assert_factor(&a, layout, &m, &format!("{isa:?} n={n} known={known}"));
         }
     }
 

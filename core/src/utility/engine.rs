@@ -1121,12 +1121,7 @@ pub(crate) mod tests {
         {
             let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
             assert_eq!(e.isa(), isa);
-            let dense = e.utility(&walk).expect("dense");
-            let mut st = e.start(walk[0]).expect("start");
-            for &v in &walk[1..] {
-                st.push(v).expect("push");
-            }
-            let inc = st.utility().expect("incremental");
+            let (dense, inc) = dense_and_incremental(&e, &walk);
             for (what, got) in [("dense", dense), ("incremental", inc)] {
                 assert!(
                     (got - want).abs() <= 1e-9 * want.abs().max(1.0),
@@ -1147,6 +1142,16 @@ pub(crate) mod tests {
         }
         check_s_side(isa);
         check_floors(isa);
+    }
+
+    /// `walk`'s utility by the dense path and grown vertex by vertex.
+    fn dense_and_incremental(e: &UtilityEngine, walk: &[usize]) -> (f64, f64) {
+        let dense = e.utility(walk).expect("dense");
+        let mut st = e.start(walk[0]).expect("start");
+        for &v in &walk[1..] {
+            st.push(v).expect("push");
+        }
+        (dense, st.utility().expect("incremental"))
     }
 
     /// `floors` square grid floors of `k x k` vertices `spacing` m apart (vertex index
@@ -1236,12 +1241,7 @@ pub(crate) mod tests {
         let all: Vec<usize> = (0..b.len()).collect();
         let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
         assert_eq!(e.parts.len(), 2, "one dense part per floor");
-        let dense = e.utility(&walk).expect("dense");
-        let mut st = e.start(walk[0]).expect("start");
-        for &v in &walk[1..] {
-            st.push(v).expect("push");
-        }
-        let inc = st.utility().expect("incremental");
+        let (dense, inc) = dense_and_incremental(&e, &walk);
         let prior = e.prior_utility().expect("prior");
         let pw = reference_utility(
             &kernel,
@@ -1287,12 +1287,7 @@ pub(crate) mod tests {
             let want = reference_utility(&kernel, &b.vertex_points(), &obs).expect("reference");
             let all: Vec<usize> = (0..b.len()).collect();
             let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
-            let dense = e.utility(&walk).expect("dense");
-            let mut st = e.start(walk[0]).expect("start");
-            for &v in &walk[1..] {
-                st.push(v).expect("push");
-            }
-            let inc = st.utility().expect("incremental");
+            let (dense, inc) = dense_and_incremental(&e, &walk);
             for (what, got) in [("dense S side", dense), ("incremental", inc)] {
                 assert!(
                     (got - want).abs() <= 1e-9 * want.abs().max(1.0),
