@@ -359,37 +359,50 @@ fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
 /// 23 s for `-b`, under the sanitizer). The unit became a sliver whose grid fell into
 /// thousands of parts, and joining them read every edge of the floor again for each join.
 /// Now the parts are tracked as they are joined, the 400 closest pairs kept in a heap, and
-/// the pairs measured per space bounded (`BRIDGE_MAX_PAIRS`): the plan imports in seconds,
-/// a valid building of its largest connected part, and the parts left apart are reported.
+/// the pairs measured per space bounded (`BRIDGE_MAX_PAIRS`). With `MAX_GRID_CELLS` at
+/// 100,000, `-a` (a unit 73 km by 8 m, 146,800 cells) is refused at once naming the unit
+/// and its size; `-b` imports in seconds, a valid building of its largest connected part,
+/// with the parts left apart reported.
 #[test]
-fn a_unit_stretched_two_degrees_imports_in_bounded_time() {
+fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
     use trailprint::Building;
     use trailprint::floorplan::import_imdf_files;
 
-    for name in [
-        "imdf-unit-two-degrees-long-a.bin",
-        "imdf-unit-two-degrees-long-b.bin",
+    let files = imdf_files("imdf-unit-two-degrees-long-a.bin");
+    let err = within(60, move || {
+        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    })
+    .expect_err("a unit 73 km long is over the grid limit");
+    let msg = err.to_string();
+    for part in [
+        "fuzz-imdf",
+        "grid cells",
+        "room \"Shoes\"",
+        "73363 m by 8 m",
     ] {
-        let files = imdf_files(name);
-        let imp = within(60, move || {
-            import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
-        })
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
-        let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
-            panic!("{name}: the importer wrote a building the validator refuses: {e}")
-        });
-        assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
-        assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+        assert!(msg.contains(part), "{msg:?} should name {part:?}");
+    }
+
+    let name = "imdf-unit-two-degrees-long-b.bin";
+    let files = imdf_files(name);
+    let imp = within(60, move || {
+        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    })
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+        panic!("{name}: the importer wrote a building the validator refuses: {e}")
+    });
+    assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+    assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+    assert!(
+        !imp.dropped.is_empty(),
+        "{name}: the rooms cut off by the sliver are reported"
+    );
+    for part in &imp.dropped {
         assert!(
-            !imp.dropped.is_empty(),
-            "{name}: the rooms cut off by the sliver are reported"
+            part.vertices > 0 && !part.spaces.is_empty(),
+            "{name}: {part}"
         );
-        for part in &imp.dropped {
-            assert!(
-                part.vertices > 0 && !part.spaces.is_empty(),
-                "{name}: {part}"
-            );
-        }
     }
 }
 
@@ -413,6 +426,31 @@ fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
             assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
         }
         Err(e) => assert!(e.to_string().contains("fuzz.geojson"), "{name}: {e}"),
+    }
+}
+
+/// An 11 KB OSM plan (a `floorplan_osm` timeout of 3 December: over 10 s under the
+/// sanitizer) with a room mutated into a sliver 20 m by 111 km: at 2 m it grew a network
+/// of 261,506 vertices, 8.3 s and 490 MB to import into the store, far beyond what anyone
+/// can plan. With `MAX_GRID_CELLS` at 100,000 it is refused before any grid is laid,
+/// naming the room and its size.
+#[test]
+fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
+    let input = text("osm-room-a-degree-long.geojson");
+    let err = within(30, move || {
+        import_osm_text(&input, "big.geojson", &ImportOptions::default())
+    })
+    .expect_err("a room 111 km long is over the grid limit");
+    let msg = err.to_string();
+    for part in [
+        "big.geojson",
+        "grid cells",
+        &MAX_GRID_CELLS.to_string(),
+        "room \"Lab\" (way/1011)",
+        "20 m by 111212 m",
+        "larger spacing",
+    ] {
+        assert!(msg.contains(part), "{msg:?} should name {part:?}");
     }
 }
 

@@ -39,10 +39,14 @@ use crate::{Error, Result};
 
 /// Grid points keep at least this distance from walls, metres.
 pub const CLEARANCE_M: f64 = 0.3;
-/// Most grid cells the walkable network tries over all spaces: 1,000,000, 4 km² of floor at
-/// the default 2 m spacing (a hundred floors of a large office tower). A plan that needs more
-/// is refused before any is laid.
-pub const MAX_GRID_CELLS: usize = 1_000_000;
+/// Most grid cells the walkable network tries over all spaces: 100,000, 0.4 km² of floor at
+/// the default 2 m spacing (four floors of a mall 316 m square). That is 20 times the
+/// largest network the planner takes under its default memory budget (about 5,000
+/// vertices, `plan::DEFAULT_MEMORY_BUDGET`), so a plan that needs more is not a building
+/// anyone can plan at this spacing: it is refused before any cell is laid, naming the
+/// space, and a larger `--spacing` imports it. (It was 1,000,000 until the OSM fuzzer
+/// found 11 KB plans that grew 261,506 vertices and took 8 s and 490 MB to import.)
+pub const MAX_GRID_CELLS: usize = 100_000;
 /// A door joins the spaces whose outline passes within this distance, metres.
 pub const DOOR_SNAP_M: f64 = 0.5;
 /// Slack of an edge at a door or a shared boundary, and of a wall crossing at a door, metres.
