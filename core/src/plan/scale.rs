@@ -356,12 +356,16 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     };
     fixed.truncate(timed.len());
     let mut t_exact = Duration::ZERO;
+    // The cheapest of them: the first evaluation also builds the engine's lazy state, so
+    // the longest overstates what one costs in the search.
+    let mut t_eval: Option<Duration> = None;
     let mut fixed_u = Vec::with_capacity(fixed.len());
     for (w, (u, t)) in fixed.iter().zip(timed) {
         let u = u?;
         p.offer(run, w, u);
         fixed_u.push(u);
         t_exact = t_exact.max(t);
+        t_eval = Some(t_eval.map_or(t, |e| e.min(t)));
     }
     let first = cur.clone();
     // Exact evaluations during the search when they are cheap beside the limit (at most a
@@ -388,7 +392,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     //     the surrogate's optimum into an exact one (office robot 201 m, 2 s: 86.55 ->
     //     90.41 nats). Without a time limit, the last EXACT_PHASE_SHARE of the batches.
     let threads = rayon::current_num_threads().clamp(1, BATCH) as f64;
-    let batch_exact = t_exact.mul_f64((BATCH as f64 / threads).ceil());
+    let batch_exact = t_eval
+        .unwrap_or(t_exact)
+        .mul_f64((BATCH as f64 / threads).ceil());
     let exact_from: Option<Instant> = stop_at.and_then(|t| {
         let window = t.checked_duration_since(Instant::now())?;
         let share = window.mul_f64(EXACT_PHASE_SHARE);
