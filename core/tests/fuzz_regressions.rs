@@ -454,6 +454,49 @@ fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
     }
 }
 
+/// An OSM plan (a `floorplan_osm` timeout of 3 December, over 60 s in release) whose space
+/// of 30,000 grid points had a few cut off: each join in `bridge` filtered the whole space
+/// for every vertex inside, `n_in * n` steps however few the pairs. Now the two sides are
+/// listed once per join and pairs compared by squared distance: 2.3 s in release.
+#[test]
+fn an_osm_space_with_a_few_vertices_cut_off_bridges_in_bounded_time() {
+    use trailprint::Building;
+
+    let name = "osm-bridge-scan-65aa4573.geojson";
+    let input = text(name);
+    let imp = within(60, move || {
+        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    })
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+        panic!("{name}: the importer wrote a building the validator refuses: {e}")
+    });
+    assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+    assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+}
+
+/// An OSM plan with a corridor moved 2,769 km away by a mutated coordinate (a
+/// `floorplan_osm` timeout of 3 December): the importer gridded it for 12 s and then the
+/// validator refused the building, naming a vertex the user never wrote. It is now
+/// refused before any grid is laid, naming the corridor.
+#[test]
+fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
+    let input = text("osm-space-beyond-range-bf79aaf7.geojson");
+    let err = within(30, move || {
+        import_osm_text(&input, "far.geojson", &ImportOptions::default())
+    })
+    .expect_err("a corridor 2,769 km away is beyond the building format's range");
+    let msg = err.to_string();
+    for part in [
+        "far.geojson",
+        "corridor \"Corridor 0\" (way/1002)",
+        "2.769e6 m",
+        "1e6 m",
+    ] {
+        assert!(msg.contains(part), "{msg:?} should name {part:?}");
+    }
+}
+
 /// IMDF files of one level holding one walkable square hall `side_m` metres across.
 fn imdf_square_hall(side_m: f64) -> std::collections::HashMap<String, String> {
     let (lat0, lon0) = (48.8763_f64, 2.3591_f64);
