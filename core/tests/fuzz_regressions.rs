@@ -497,6 +497,33 @@ fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
     }
 }
 
+/// IMDF files (a `floorplan_imdf` out-of-memory of 3 December: a 1 GiB allocation) with a
+/// unit whose outline a mutated coordinate made thousands of kilometres long: the search
+/// for shared boundaries sampled it every 0.1 m. It now takes at most about 20,000
+/// samples an outline. This replays the input (imported as a valid building, or refused);
+/// a test process allows the 1 GiB the fuzzer refused, so the bound itself is checked by
+/// `geom::tests::shared_runs_takes_bounded_samples_on_a_huge_outline`.
+#[test]
+fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memory() {
+    use trailprint::Building;
+    use trailprint::floorplan::import_imdf_files;
+
+    let name = "imdf-outline-thousands-of-km-636e9ccc.bin";
+    let files = imdf_files(name);
+    let result = within(60, move || {
+        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    });
+    match result {
+        Ok(imp) => {
+            let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+                panic!("{name}: the importer wrote a building the validator refuses: {e}")
+            });
+            assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+        }
+        Err(e) => assert!(e.to_string().contains("fuzz-imdf"), "{name}: {e}"),
+    }
+}
+
 /// IMDF files of one level holding one walkable square hall `side_m` metres across.
 fn imdf_square_hall(side_m: f64) -> std::collections::HashMap<String, String> {
     let (lat0, lon0) = (48.8763_f64, 2.3591_f64);

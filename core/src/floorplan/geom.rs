@@ -10,6 +10,10 @@ use geo::{
 /// Step of the samples along segments and boundaries, metres.
 const SAMPLE_M: f64 = 0.05;
 
+/// Most samples [`shared_runs`] takes along one outline (besides one per segment): 20,000,
+/// every 0.1 m of a 2 km outline.
+const MAX_RING_SAMPLES: usize = 20_000;
+
 /// Distance from `c` to the nearest ring (outer or hole) of `poly`.
 pub(crate) fn boundary_distance(poly: &Polygon<f64>, c: Coord<f64>) -> f64 {
     let p = Point(c);
@@ -196,15 +200,25 @@ impl Run {
 /// Stretches of `a`'s outer boundary that run along `b` (within `tol` of `b`'s boundary, or
 /// inside `b` where the two overlap), longest first.
 pub(crate) fn shared_runs(a: &Polygon<f64>, b: &Polygon<f64>, tol: f64) -> Vec<Run> {
-    // Samples along the ring with the length each one stands for.
+    // Samples along the ring with the length each one stands for: every `2 SAMPLE_M`, or
+    // coarser on an outline over 2 km long, so that there are at most about
+    // MAX_RING_SAMPLES (plus one per segment). A unit outline thousands of kilometres long
+    // (a mutated coordinate) asked for a gigabyte of samples (found by `floorplan_imdf`).
+    let perimeter: f64 = a
+        .exterior()
+        .lines()
+        .map(|l| l.delta().x.hypot(l.delta().y))
+        .filter(|l| l.is_finite())
+        .sum();
+    let step = (2.0 * SAMPLE_M).max(perimeter / MAX_RING_SAMPLES as f64);
     let mut samples: Vec<(Coord<f64>, f64, bool)> = Vec::new();
     for line in a.exterior().lines() {
         let d = line.delta();
         let len = d.x.hypot(d.y);
-        if len <= 0.0 {
+        if !(len > 0.0 && len.is_finite()) {
             continue;
         }
-        let n = (len / (2.0 * SAMPLE_M)).ceil().max(1.0) as usize;
+        let n = (len / step).ceil().max(1.0) as usize;
         for i in 0..n {
             let p = line.start + d * ((i as f64 + 0.5) / n as f64);
             let on = covers(b, p, tol);
@@ -285,6 +299,31 @@ pub(crate) fn dist(a: Coord<f64>, b: Coord<f64>) -> f64 {
 mod tests {
     use super::*;
     use geo::polygon;
+
+    /// A room inside a larger area shares its whole outline. A 10 m room keeps a sample
+    /// every 0.1 m; an outline 4,000 km long (a mutated coordinate; `floorplan_imdf` found
+    /// one that asked for a gigabyte of samples) gets at most MAX_RING_SAMPLES and one per
+    /// segment, and still measures its full length.
+    #[test]
+    fn shared_runs_takes_bounded_samples_on_a_huge_outline() {
+        let area =
+            polygon![(x: -2e6, y: -2e6), (x: 2e6, y: -2e6), (x: 2e6, y: 2e6), (x: -2e6, y: 2e6)];
+        let small =
+            polygon![(x: 0.0, y: 0.0), (x: 10.0, y: 0.0), (x: 10.0, y: 10.0), (x: 0.0, y: 10.0)];
+        let runs = shared_runs(&small, &area, 0.15);
+        assert_eq!(runs.len(), 1);
+        assert_eq!(runs[0].points.len(), 400);
+        assert!((runs[0].length - 40.0).abs() < 1e-9);
+        let huge = polygon![(x: 0.0, y: 0.0), (x: 1e6, y: 0.0), (x: 1e6, y: 1e6), (x: 0.0, y: 1e6)];
+        let runs = shared_runs(&huge, &area, 0.15);
+        assert_eq!(runs.len(), 1);
+        assert!(
+            runs[0].points.len() <= MAX_RING_SAMPLES + 4,
+            "{}",
+            runs[0].points.len()
+        );
+        assert!((runs[0].length - 4e6).abs() < 1e-3, "{}", runs[0].length);
+    }
 
     #[test]
     fn narrow_corridor_gets_its_centre_line() {
