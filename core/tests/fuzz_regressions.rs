@@ -35,6 +35,24 @@ fn within<T: Send + 'static>(secs: u64, f: impl FnOnce() -> T + Send + 'static) 
 /// laid a 2 m grid over it, half a billion cells, for hours and until memory ran out (seen
 /// in the grid code while writing the `floorplan_osm` target; `trailprint import-floorplan`
 /// on it was still running after 60 s). It is refused at once, naming the room and its size.
+
+/// Fails unless `msg` contains every one of `parts` (what a refusal must name).
+fn assert_names(msg: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(msg.contains(part), "{msg:?} should name {part:?}");
+    }
+}
+
+/// Checks that the validator accepts the building an import wrote and that the counts the
+/// import reports are the building's.
+fn valid_import(imp: &trailprint::floorplan::FloorplanImport, name: &str) {
+    let b = trailprint::Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
+        panic!("{name}: the importer wrote a building the validator refuses: {e}")
+    });
+    assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+    assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+}
+
 #[test]
 fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
     let input = text("osm-room-half-a-degree.geojson");
@@ -43,15 +61,16 @@ fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
     })
     .expect_err("a 37 km room is not an indoor floor plan");
     let msg = err.to_string();
-    for part in [
-        "room.geojson",
-        "grid cells",
-        &MAX_GRID_CELLS.to_string(),
-        "room way/1",
-        "37313 m by 55595 m",
-    ] {
-        assert!(msg.contains(part), "{msg:?} should name {part:?}");
-    }
+    assert_names(
+        &msg,
+        &[
+            "room.geojson",
+            "grid cells",
+            &MAX_GRID_CELLS.to_string(),
+            "room way/1",
+            "37313 m by 55595 m",
+        ],
+    );
 }
 
 /// A scan reading of -0 dBm (and a robot pose at x = -0): the live session kept the
@@ -203,9 +222,10 @@ fn the_store_refuses_event_times_past_max_event_t_ms() {
             .append_event(id, t, &SessionEvent::Resume)
             .expect_err(&format!("at_ms {t} accepted"));
         let msg = err.to_string();
-        for part in ["at_ms", &MAX_EVENT_T_MS.to_string(), &t.to_string()] {
-            assert!(msg.contains(part), "{msg:?} should name {part:?}");
-        }
+        assert_names(
+            &msg,
+            &["at_ms", &MAX_EVENT_T_MS.to_string(), &t.to_string()],
+        );
     }
     let events = store.list_events(id, 0).unwrap();
     assert_eq!(events.len(), 1);
@@ -365,7 +385,6 @@ fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
 /// with the parts left apart reported.
 #[test]
 fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
-    use trailprint::Building;
     use trailprint::floorplan::import_imdf_files;
 
     let files = imdf_files("imdf-unit-two-degrees-long-a.bin");
@@ -374,14 +393,15 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
     })
     .expect_err("a unit 73 km long is over the grid limit");
     let msg = err.to_string();
-    for part in [
-        "fuzz-imdf",
-        "grid cells",
-        "room \"Shoes\"",
-        "73363 m by 8 m",
-    ] {
-        assert!(msg.contains(part), "{msg:?} should name {part:?}");
-    }
+    assert_names(
+        &msg,
+        &[
+            "fuzz-imdf",
+            "grid cells",
+            "room \"Shoes\"",
+            "73363 m by 8 m",
+        ],
+    );
 
     let name = "imdf-unit-two-degrees-long-b.bin";
     let files = imdf_files(name);
@@ -389,11 +409,7 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
         import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
-        panic!("{name}: the importer wrote a building the validator refuses: {e}")
-    });
-    assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
-    assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+    valid_import(&imp, name);
     assert!(
         !imp.dropped.is_empty(),
         "{name}: the rooms cut off by the sliver are reported"
@@ -411,8 +427,6 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
 /// plan is a building the validator takes.
 #[test]
 fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
-    use trailprint::Building;
-
     let name = "osm-timeout-f58c5975.geojson";
     let input = text(name);
     let result = within(60, move || {
@@ -420,10 +434,7 @@ fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
     });
     match result {
         Ok(imp) => {
-            let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
-                panic!("{name}: the importer wrote a building the validator refuses: {e}")
-            });
-            assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+            valid_import(&imp, name);
         }
         Err(e) => assert!(e.to_string().contains("fuzz.geojson"), "{name}: {e}"),
     }
@@ -442,16 +453,17 @@ fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
     })
     .expect_err("a room 111 km long is over the grid limit");
     let msg = err.to_string();
-    for part in [
-        "big.geojson",
-        "grid cells",
-        &MAX_GRID_CELLS.to_string(),
-        "room \"Lab\" (way/1011)",
-        "20 m by 111212 m",
-        "larger spacing",
-    ] {
-        assert!(msg.contains(part), "{msg:?} should name {part:?}");
-    }
+    assert_names(
+        &msg,
+        &[
+            "big.geojson",
+            "grid cells",
+            &MAX_GRID_CELLS.to_string(),
+            "room \"Lab\" (way/1011)",
+            "20 m by 111212 m",
+            "larger spacing",
+        ],
+    );
 }
 
 /// An OSM plan (a `floorplan_osm` timeout of 3 December, over 60 s in release) whose space
@@ -460,19 +472,13 @@ fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
 /// listed once per join and pairs compared by squared distance: 2.3 s in release.
 #[test]
 fn an_osm_space_with_a_few_vertices_cut_off_bridges_in_bounded_time() {
-    use trailprint::Building;
-
     let name = "osm-bridge-scan-65aa4573.geojson";
     let input = text(name);
     let imp = within(60, move || {
         import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
     })
     .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
-        panic!("{name}: the importer wrote a building the validator refuses: {e}")
-    });
-    assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
-    assert_eq!(imp.stats.edges, b.edges.len(), "{name}: edge count");
+    valid_import(&imp, name);
 }
 
 /// An OSM plan with a corridor moved 2,769 km away by a mutated coordinate (a
@@ -487,14 +493,15 @@ fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
     })
     .expect_err("a corridor 2,769 km away is beyond the building format's range");
     let msg = err.to_string();
-    for part in [
-        "far.geojson",
-        "corridor \"Corridor 0\" (way/1002)",
-        "2.769e6 m",
-        "1e6 m",
-    ] {
-        assert!(msg.contains(part), "{msg:?} should name {part:?}");
-    }
+    assert_names(
+        &msg,
+        &[
+            "far.geojson",
+            "corridor \"Corridor 0\" (way/1002)",
+            "2.769e6 m",
+            "1e6 m",
+        ],
+    );
 }
 
 /// IMDF files (a `floorplan_imdf` out-of-memory of 3 December: a 1 GiB allocation) with a
@@ -505,7 +512,6 @@ fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
 /// `geom::tests::shared_runs_takes_bounded_samples_on_a_huge_outline`.
 #[test]
 fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memory() {
-    use trailprint::Building;
     use trailprint::floorplan::import_imdf_files;
 
     let name = "imdf-outline-thousands-of-km-636e9ccc.bin";
@@ -515,10 +521,7 @@ fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memor
     });
     match result {
         Ok(imp) => {
-            let b = Building::from_file(imp.file.clone(), name).unwrap_or_else(|e| {
-                panic!("{name}: the importer wrote a building the validator refuses: {e}")
-            });
-            assert_eq!(imp.stats.vertices, b.len(), "{name}: vertex count");
+            valid_import(&imp, name);
         }
         Err(e) => assert!(e.to_string().contains("fuzz-imdf"), "{name}: {e}"),
     }
