@@ -300,6 +300,8 @@ pub(crate) fn build(
     }
     let rank: BTreeMap<i64, usize> = floors.iter().enumerate().map(|(i, f)| (f.id, i)).collect();
     let mut net = Net::default();
+    // Pairs `bridge` may still measure in this import (shared by every space).
+    let mut bridge_budget = BRIDGE_MAX_PAIRS;
     let mut spaces_with_vertices = BTreeSet::new();
     let mut doors_used = 0usize;
     let mut door_touched = vec![false; doors.len()];
@@ -377,7 +379,7 @@ pub(crate) fn build(
                 );
             }
             net.space_verts.insert(si, mine.clone());
-            bridge(&mut net, &ctx, poly, &mine);
+            bridge(&mut net, &ctx, poly, &mine, &mut bridge_budget);
             spaces_with_vertices.insert(si);
         }
 
@@ -943,19 +945,28 @@ fn fill_gaps(
     }
 }
 
-/// Most vertex pairs [`bridge`] measures for one space, over all its joins: 50,000,000 (one
-/// join of two halves of a 14,000-vertex space, a hall of about 5 hectares at 2 m). A
-/// space in so many parts that joining them would take more (a sliver kilometres long from
-/// a typo in a coordinate: found by the `floorplan_imdf` fuzz target, over 120 s) keeps the
-/// parts not yet joined; those no door joins later are dropped and reported
-/// ([`DroppedPart`]) like any other part.
+/// Most vertex pairs [`bridge`] measures in one import, over all its spaces and joins:
+/// 50,000,000 (one join of two halves of a 14,000-vertex space, a hall of about 5 hectares
+/// at 2 m; about 0.25 s). A space in so many parts that joining them would take more (a
+/// sliver kilometres long from a typo in a coordinate: found by the `floorplan_imdf` fuzz
+/// target, over 120 s) keeps the parts not yet joined; those no door joins later are
+/// dropped and reported ([`DroppedPart`]) like any other part. The budget was per space
+/// until `floorplan_osm` found an 11 KB plan of many such slivers: each spent its own
+/// 50,000,000 and the import took 0.7 s in release (22 s under the sanitizer) for 200
+/// vertices.
 pub(crate) const BRIDGE_MAX_PAIRS: usize = 50_000_000;
 
 /// Joins the parts of one space's network that the grid left apart, each time by the
 /// closest pair in sight (up to 400 pairs tried per join) between the part of the space's
 /// first vertex and the rest, until one part is left, no pair in sight joins, or
 /// [`BRIDGE_MAX_PAIRS`] pairs have been measured.
-fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]) {
+fn bridge(
+    net: &mut Net,
+    ctx: &FloorCtx<'_>,
+    poly: &Polygon<f64>,
+    mine: &[usize],
+    budget: &mut usize,
+) {
     /// Pairs tried per join, closest first.
     const TRIED: usize = 400;
     fn find(p: &mut [usize], mut x: usize) -> usize {
@@ -979,7 +990,6 @@ fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]
             parent[ra] = rb;
         }
     }
-    let mut measured = 0usize;
     loop {
         let root0 = find(&mut parent, 0);
         let inside: Vec<bool> = (0..mine.len())
@@ -987,38 +997,52 @@ fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]
             .collect();
         let n_in = inside.iter().filter(|&&x| x).count();
         let pairs = n_in * (mine.len() - n_in);
-        if pairs == 0 || measured.saturating_add(pairs) > BRIDGE_MAX_PAIRS {
+        if pairs == 0 || pairs > *budget {
             return;
         }
-        measured += pairs;
-        // The `TRIED` closest pairs, ties in the order (i, j): a bounded heap whose top is
-        // the farthest kept, instead of sorting every pair (memory stays at `TRIED`).
-        let mut best: std::collections::BinaryHeap<(ByDist, usize, usize)> =
-            std::collections::BinaryHeap::with_capacity(TRIED + 1);
+        *budget -= pairs;
+        // The `TRIED` closest pairs, ties in the order (i, j), without sorting every pair:
+        // candidates gather in a buffer of `4 TRIED`; when it is full the `TRIED` smallest
+        // are selected (linear time) and the rest dropped, so memory stays at `4 TRIED`.
+        // (A bounded heap spent half the import in `sift_down` on a sliver whose pairs come
+        // closer one after the other, each replacing the top.)
+        let mut best: Vec<(ByDist, usize, usize)> = Vec::with_capacity(4 * TRIED);
         // The two sides listed once: filtering all of `mine` for each `i` cost
         // `n_in * mine.len()` however few the pairs (a part of 28,000 vertices with a few
         // outside took minutes; found by `floorplan_osm`).
         let (ins, outs): (Vec<usize>, Vec<usize>) = (0..mine.len()).partition(|&i| inside[i]);
+        // Positions of the outside side, contiguous, for the inner loop.
+        let out_pos: Vec<(f64, f64)> = outs
+            .iter()
+            .map(|&j| (net.verts[mine[j]].pos.x, net.verts[mine[j]].pos.y))
+            .collect();
+        // Squared distance of the `TRIED`-th closest pair kept at the last selection: a pair
+        // no closer cannot be among the `TRIED` closest. Pairs come in increasing `(i, j)`,
+        // so one at exactly that distance ranks after it anyway. (Coordinates are finite, so
+        // no distance is NaN.)
+        let mut worst = f64::INFINITY;
         for &i in &ins {
             let pi = net.verts[mine[i]].pos;
-            for &j in &outs {
+            for (&j, &(xj, yj)) in outs.iter().zip(&out_pos) {
                 // Squared distance: the same order as the distance, without a `hypot`
                 // per pair (a third of the time of a large join).
-                let pj = net.verts[mine[j]].pos;
-                let (dx, dy) = (pi.x - pj.x, pi.y - pj.y);
-                let item = (ByDist(dx * dx + dy * dy), i, j);
-                if best.len() < TRIED {
-                    best.push(item);
-                } else if let Some(mut top) = best.peek_mut()
-                    && item < *top
-                {
-                    // Replaced in place: one sift instead of a pop and a push.
-                    *top = item;
+                let (dx, dy) = (pi.x - xj, pi.y - yj);
+                let d2 = dx * dx + dy * dy;
+                if d2 >= worst {
+                    continue;
+                }
+                best.push((ByDist(d2), i, j));
+                if best.len() == 4 * TRIED {
+                    best.select_nth_unstable(TRIED - 1);
+                    best.truncate(TRIED);
+                    worst = best[TRIED - 1].0.0;
                 }
             }
         }
+        best.sort_unstable();
+        best.truncate(TRIED);
         let mut joined = None;
-        for (_, i, j) in best.into_sorted_vec() {
+        for (_, i, j) in best {
             let (a, b) = (net.verts[mine[i]].pos, net.verts[mine[j]].pos);
             if segment_within(poly, a, b, 0.0) && ctx.walls_ok(net, a, b) {
                 net.edge(mine[i], mine[j], None);
@@ -1034,7 +1058,7 @@ fn bridge(net: &mut Net, ctx: &FloorCtx<'_>, poly: &Polygon<f64>, mine: &[usize]
     }
 }
 
-/// A (squared) distance ordered by [`f64::total_cmp`], for the heap of [`bridge`].
+/// A (squared) distance ordered by [`f64::total_cmp`], for the pairs of [`bridge`].
 #[derive(Clone, Copy, Debug)]
 struct ByDist(f64);
 
