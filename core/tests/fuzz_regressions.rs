@@ -527,6 +527,34 @@ fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memor
     }
 }
 
+/// Two `floorplan_osm` and `floorplan_imdf` timeouts of 3 December (20 to 37 s under the
+/// sanitizer): an OSM plan whose rooms became slivers in many parts, where each space spent
+/// its own `BRIDGE_MAX_PAIRS` (0.70 s in release), and an IMDF level stretched 2 km that
+/// grows a 28,619-vertex network (0.81 s). The pair budget is now one for the whole import
+/// and the closest pairs are selected without a heap: 0.18 s and 0.33 s. Both still import
+/// as valid buildings with the same vertices (these replays pass on the old code too; the
+/// times are in the commit, not asserted here).
+#[test]
+fn plans_that_timed_out_in_bridging_on_3_december_import_as_valid_buildings() {
+    use trailprint::floorplan::import_imdf_files;
+
+    let name = "osm-slivers-c60bdf9c.geojson";
+    let input = text(name);
+    let imp = within(60, move || {
+        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    })
+    .expect("the OSM plan imports");
+    valid_import(&imp, name);
+    let name = "imdf-level-stretched-5cf1f027.bin";
+    let files = imdf_files(name);
+    let imp = within(60, move || {
+        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    })
+    .expect("the IMDF plan imports");
+    valid_import(&imp, name);
+    assert_eq!(imp.stats.vertices, 28_619);
+}
+
 /// IMDF files of one level holding one walkable square hall `side_m` metres across.
 fn imdf_square_hall(side_m: f64) -> std::collections::HashMap<String, String> {
     let (lat0, lon0) = (48.8763_f64, 2.3591_f64);
