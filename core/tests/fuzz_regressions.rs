@@ -422,17 +422,30 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
     }
 }
 
+/// Imports the OSM fixture `name` as `fuzz.geojson`, failing the test after 60 s.
+fn replay_osm(name: &str) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
+    let input = text(name);
+    within(60, move || {
+        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    })
+}
+
+/// Imports the IMDF fixture `name` (NUL-separated files) as `fuzz-imdf`, failing the test
+/// after 60 s.
+fn replay_imdf(name: &str) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
+    let files = imdf_files(name);
+    within(60, move || {
+        trailprint::floorplan::import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    })
+}
+
 /// An OSM input of `floorplan_osm` that timed out in the same place (`bridge`, over 100 s
 /// under the sanitizer): it is imported or refused within the same bound, and an accepted
 /// plan is a building the validator takes.
 #[test]
 fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
     let name = "osm-timeout-f58c5975.geojson";
-    let input = text(name);
-    let result = within(60, move || {
-        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
-    });
-    match result {
+    match replay_osm(name) {
         Ok(imp) => {
             valid_import(&imp, name);
         }
@@ -512,14 +525,8 @@ fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
 /// `geom::tests::shared_runs_takes_bounded_samples_on_a_huge_outline`.
 #[test]
 fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memory() {
-    use trailprint::floorplan::import_imdf_files;
-
     let name = "imdf-outline-thousands-of-km-636e9ccc.bin";
-    let files = imdf_files(name);
-    let result = within(60, move || {
-        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
-    });
-    match result {
+    match replay_imdf(name) {
         Ok(imp) => {
             valid_import(&imp, name);
         }
@@ -536,21 +543,11 @@ fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memor
 /// times are in the commit, not asserted here).
 #[test]
 fn plans_that_timed_out_in_bridging_on_3_december_import_as_valid_buildings() {
-    use trailprint::floorplan::import_imdf_files;
-
     let name = "osm-slivers-c60bdf9c.geojson";
-    let input = text(name);
-    let imp = within(60, move || {
-        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
-    })
-    .expect("the OSM plan imports");
+    let imp = replay_osm(name).expect("the OSM plan imports");
     valid_import(&imp, name);
     let name = "imdf-level-stretched-5cf1f027.bin";
-    let files = imdf_files(name);
-    let imp = within(60, move || {
-        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
-    })
-    .expect("the IMDF plan imports");
+    let imp = replay_imdf(name).expect("the IMDF plan imports");
     valid_import(&imp, name);
     assert_eq!(imp.stats.vertices, 28_619);
 }
