@@ -245,16 +245,18 @@ impl Run {
     /// stage's own figure, the best walk offered, and what was reported before).
     pub fn report(&self, algorithm: Algorithm, fraction: f64, best: Option<f64>, msg: String) {
         if let Some(o) = &self.control.observer {
+            // The report is made and delivered under one lock: parallel workers (the
+            // recursive greedy's splits) took it only to make theirs, and one preempted
+            // between the two delivered a lower fraction and best after a later report
+            // (seen once in CI: "fraction went back from 0.4 to 0.3").
+            let mut r = self.reported.lock().unwrap_or_else(|e| e.into_inner());
             let len = f64::from_bits(self.best_length.load(Ordering::Relaxed));
             let offered = self.incumbent().map(|(_, u)| u);
-            let (fraction, best) = {
-                let mut r = self.reported.lock().unwrap_or_else(|e| e.into_inner());
-                r.0 = r.0.max(fraction.clamp(0.0, 1.0));
-                for u in [best, offered].into_iter().flatten() {
-                    r.1 = Some(r.1.map_or(u, |b: f64| b.max(u)));
-                }
-                *r
-            };
+            r.0 = r.0.max(fraction.clamp(0.0, 1.0));
+            for u in [best, offered].into_iter().flatten() {
+                r.1 = Some(r.1.map_or(u, |b: f64| b.max(u)));
+            }
+            let (fraction, best) = *r;
             o.progress(&Progress {
                 algorithm: self.algorithm.unwrap_or(algorithm),
                 fraction,
@@ -262,6 +264,7 @@ impl Run {
                 best_length: (best.is_some() && len.is_finite()).then_some(len),
                 message: msg,
             });
+            drop(r);
         }
     }
 }
