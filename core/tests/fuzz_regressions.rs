@@ -439,18 +439,25 @@ fn replay_imdf(name: &str) -> trailprint::Result<trailprint::floorplan::Floorpla
     })
 }
 
+/// An accepted import is a building the validator takes; a refusal names `origin`.
+fn valid_or_refused(
+    result: trailprint::Result<trailprint::floorplan::FloorplanImport>,
+    name: &str,
+    origin: &str,
+) {
+    match result {
+        Ok(imp) => valid_import(&imp, name),
+        Err(e) => assert!(e.to_string().contains(origin), "{name}: {e}"),
+    }
+}
+
 /// An OSM input of `floorplan_osm` that timed out in the same place (`bridge`, over 100 s
 /// under the sanitizer): it is imported or refused within the same bound, and an accepted
 /// plan is a building the validator takes.
 #[test]
 fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
     let name = "osm-timeout-f58c5975.geojson";
-    match replay_osm(name) {
-        Ok(imp) => {
-            valid_import(&imp, name);
-        }
-        Err(e) => assert!(e.to_string().contains("fuzz.geojson"), "{name}: {e}"),
-    }
+    valid_or_refused(replay_osm(name), name, "fuzz.geojson");
 }
 
 /// An 11 KB OSM plan (a `floorplan_osm` timeout of 3 December: over 10 s under the
@@ -526,12 +533,7 @@ fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
 #[test]
 fn an_imdf_unit_outline_thousands_of_kilometres_long_is_sampled_in_bounded_memory() {
     let name = "imdf-outline-thousands-of-km-636e9ccc.bin";
-    match replay_imdf(name) {
-        Ok(imp) => {
-            valid_import(&imp, name);
-        }
-        Err(e) => assert!(e.to_string().contains("fuzz-imdf"), "{name}: {e}"),
-    }
+    valid_or_refused(replay_imdf(name), name, "fuzz-imdf");
 }
 
 /// Two `floorplan_osm` and `floorplan_imdf` timeouts of 3 December (20 to 37 s under the
