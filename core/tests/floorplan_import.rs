@@ -433,6 +433,33 @@ fn spacing_changes_the_grid() {
     assert!(bad.contains("--spacing"), "{bad}");
 }
 
+/// A lowered `max_grid_cells` refuses a plan that needs more cells than it, naming the
+/// limit and a space, and a limit the plan fits in imports it as the default does.
+#[test]
+fn a_lowered_grid_cell_limit_refuses_a_larger_plan() {
+    let (whole, _) = import("mall-imdf");
+    let with_limit = |cells: usize| {
+        import_path(
+            &fixtures().join("mall-imdf"),
+            &ImportOptions {
+                max_grid_cells: cells,
+                ..ImportOptions::default()
+            },
+        )
+    };
+    // The grid lays at most one vertex a cell, so the plan needs more cells than a tenth
+    // of its vertices.
+    let small = whole.stats.vertices / 10;
+    let err = with_limit(small).unwrap_err().to_string();
+    assert!(
+        err.contains("grid cells") && err.contains(&format!("limit of {small}")),
+        "{err}"
+    );
+    assert!(err.contains("on floor"), "{err}");
+    let roomy = with_limit(100 * whole.stats.vertices).unwrap();
+    assert_eq!(roomy.file, whole.file);
+}
+
 /// The building file's `geo` and `outlines` keys (SPEC 7): checked with a clear error.
 #[test]
 fn geo_and_outlines_are_validated() {

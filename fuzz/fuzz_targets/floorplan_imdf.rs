@@ -6,13 +6,17 @@
 //! never a panic for a refused plan, the store row for row unchanged; an accepted plan is a
 //! valid building that re-exports to an equal one and that a store in memory takes and gives
 //! back equal; bounded memory and time).
+//!
+//! Plans are imported with `trailprint_fuzz::floorplan_options()`: the grid is capped at
+//! 5,000 cells (`FLOORPLAN_MAX_GRID_CELLS`) instead of the product's 100,000, so that a
+//! legitimately large network does not count as a timeout.
 #![no_main]
 
 use std::collections::HashMap;
 
 use libfuzzer_sys::fuzz_target;
-use trailprint::floorplan::{ImportOptions, import_imdf_files, import_imdf_zip};
-use trailprint_fuzz::check_floorplan;
+use trailprint::floorplan::{import_imdf_files, import_imdf_zip};
+use trailprint_fuzz::{check_floorplan, floorplan_options};
 
 const FILES: [&str; 7] = [
     "level.geojson",
@@ -25,7 +29,7 @@ const FILES: [&str; 7] = [
 ];
 
 fuzz_target!(|data: &[u8]| {
-    let options = ImportOptions::default();
+    let options = floorplan_options();
     if data.starts_with(b"PK") {
         check_floorplan(import_imdf_zip(data, "fuzz.zip", &options), "imdf zip");
         return;

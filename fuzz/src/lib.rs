@@ -391,6 +391,25 @@ pub fn without_counters(snap: Vec<String>) -> Vec<String> {
         .collect()
 }
 
+/// Grid cells the floor-plan targets let an import lay (`ImportOptions::max_grid_cells`),
+/// against 100,000 in the product: about the 5,000 vertices the planner takes under its
+/// default memory budget. At the product's limit a 10 KB plan legitimately grows 28,000
+/// vertices, which the instrumented binary imports, round-trips through the store and
+/// checks for leaks in 25 s (0.3 s in release): every such input was a timeout, and the
+/// runs spent their time there instead of on mutations. A plan over the limit still takes
+/// the refusal path, and the large imports are replayed in release by the ordinary tests
+/// (`core/tests/fuzz_regressions.rs`).
+pub const FLOORPLAN_MAX_GRID_CELLS: usize = 5_000;
+
+/// The import options of the floor-plan targets: the defaults with
+/// [`FLOORPLAN_MAX_GRID_CELLS`].
+pub fn floorplan_options() -> trailprint::floorplan::ImportOptions {
+    trailprint::floorplan::ImportOptions {
+        max_grid_cells: FLOORPLAN_MAX_GRID_CELLS,
+        ..Default::default()
+    }
+}
+
 /// Checks a floor-plan import's outcome and takes it on to a store in memory, as
 /// `trailprint import-floorplan` does (`Building::from_file`, then `Store::import_building`).
 ///

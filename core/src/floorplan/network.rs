@@ -224,6 +224,7 @@ pub(crate) fn build(
     plan: Plan,
     format: Format,
     spacing: f64,
+    max_cells: usize,
     name: String,
     origin: &str,
 ) -> Result<FloorplanImport> {
@@ -266,7 +267,7 @@ pub(crate) fn build(
                 .into_iter()
                 .map(f64::abs)
                 .fold(0.0, f64::max);
-            if !(far <= MAX_COORDINATE) {
+            if far.is_nan() || far > MAX_COORDINATE {
                 return Err(Error::invalid(
                     origin,
                     "$",
@@ -284,13 +285,13 @@ pub(crate) fn build(
         }
         let (n, w, h) = geom::grid_cells(&sp.polygon, spacing);
         cells += n;
-        if cells > MAX_GRID_CELLS as f64 {
+        if cells > max_cells as f64 {
             return Err(Error::invalid(
                 origin,
                 "$",
                 format!(
                     "the walkable network would need {cells:.3e} grid cells at {spacing} m \
-                     spacing, over the limit of {MAX_GRID_CELLS} ({} is {w:.0} m by {h:.0} m \
+                     spacing, over the limit of {max_cells} ({} is {w:.0} m by {h:.0} m \
                      on floor {}): check its coordinates, or import with a larger spacing",
                     sp.describe(),
                     sp.floor
@@ -379,7 +380,7 @@ pub(crate) fn build(
                 );
             }
             net.space_verts.insert(si, mine.clone());
-            bridge(&mut net, &ctx, poly, &mine, &mut bridge_budget);
+            bridge(&mut net, &ctx, poly, &mine, spacing, &mut bridge_budget);
             spaces_with_vertices.insert(si);
         }
 
@@ -956,26 +957,31 @@ fn fill_gaps(
 /// vertices.
 pub(crate) const BRIDGE_MAX_PAIRS: usize = 50_000_000;
 
-/// Joins the parts of one space's network that the grid left apart, each time by the
-/// closest pair in sight (up to 400 pairs tried per join) between the part of the space's
-/// first vertex and the rest, until one part is left, no pair in sight joins, or
-/// [`BRIDGE_MAX_PAIRS`] pairs have been measured.
+/// Joins the parts of one space's network that the grid left apart, in two passes.
+///
+/// 1. Near pass ([`join_near`]): the pairs of vertices in different parts at most
+///    [`NEAR_CELLS`] spacings apart, from each vertex outside the largest part its
+///    [`NEAR_KEPT`] closest, are tried closest first, and each one in sight joins its two
+///    parts (Kruskal's order: the shortest bridges of the space). Its work is linear in the
+///    space's vertices.
+/// 2. What is left apart: each time the closest pair in sight (up to 400 pairs tried per
+///    join) between the part of the space's first vertex and the rest, until one part is
+///    left, no pair in sight joins, or [`BRIDGE_MAX_PAIRS`] pairs have been measured.
+///
+/// (Pass 2 alone did all the joining until 3 December: a space in hundreds of parts, the
+/// spikes of a mutated outline, spent the whole pair budget, and each of its joins tried
+/// pairs hundreds of metres long, sampled along their length; found by `floorplan_osm`,
+/// 3 s for a plan of 1,434 vertices under the sanitizer.)
 fn bridge(
     net: &mut Net,
     ctx: &FloorCtx<'_>,
     poly: &Polygon<f64>,
     mine: &[usize],
+    spacing: f64,
     budget: &mut usize,
 ) {
     /// Pairs tried per join, closest first.
     const TRIED: usize = 400;
-    fn find(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
     if mine.len() < 2 {
         return;
     }
@@ -990,6 +996,7 @@ fn bridge(
             parent[ra] = rb;
         }
     }
+    join_near(net, ctx, poly, mine, spacing, &mut parent);
     loop {
         let root0 = find(&mut parent, 0);
         let inside: Vec<bool> = (0..mine.len())
@@ -1055,6 +1062,137 @@ fn bridge(
         };
         let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
         parent[ri] = rj;
+    }
+}
+
+/// Root of `x` in the union-find forest `p` (halving the path on the way).
+fn find(p: &mut [usize], mut x: usize) -> usize {
+    while p[x] != x {
+        p[x] = p[p[x]];
+        x = p[x];
+    }
+    x
+}
+
+/// Farthest apart, in spacings (grid cells each way), two vertices that [`join_near`] pairs.
+const NEAR_CELLS: i64 = 4;
+/// Closest vertices of other parts [`join_near`] keeps per vertex.
+const NEAR_KEPT: usize = 8;
+
+/// The near pass of [`bridge`]: joins parts of the space (`parent`, a union-find forest
+/// over `mine`'s indices) by their short bridges, shortest first, each if in sight.
+///
+/// The vertices go into a grid of `spacing` cells over their bounding box (no larger than
+/// the space's grid, which the cell limit bounded). Each vertex outside the largest part
+/// looks through the cells within [`NEAR_CELLS`] of its own for vertices of other parts
+/// (every pair across parts has an end outside the largest part, so none is missed) and
+/// keeps its [`NEAR_KEPT`] closest within `NEAR_CELLS` spacings. The pairs, closest first
+/// (ties by index), join their parts when still apart, in sight and clear of walls.
+fn join_near(
+    net: &mut Net,
+    ctx: &FloorCtx<'_>,
+    poly: &Polygon<f64>,
+    mine: &[usize],
+    spacing: f64,
+    parent: &mut [usize],
+) {
+    let n = mine.len();
+    let mut size = vec![0usize; n];
+    for i in 0..n {
+        size[find(parent, i)] += 1;
+    }
+    // The largest part (the lowest root among equals).
+    let Some(big) = (0..n).max_by_key(|&r| (size[r], std::cmp::Reverse(r))) else {
+        return;
+    };
+    if size[big] == n || spacing.is_nan() || spacing <= 0.0 {
+        return;
+    }
+    let pos: Vec<Coord<f64>> = mine.iter().map(|&v| net.verts[v].pos).collect();
+    let (mut lo, mut hi) = (pos[0], pos[0]);
+    for p in &pos {
+        (lo.x, lo.y, hi.x, hi.y) = (lo.x.min(p.x), lo.y.min(p.y), hi.x.max(p.x), hi.y.max(p.y));
+    }
+    let cols = ((hi.x - lo.x) / spacing).floor() + 1.0;
+    let rows = ((hi.y - lo.y) / spacing).floor() + 1.0;
+    // Vertices lie in the space, whose cells the limit bounded; a box far larger than that
+    // (vertices along a sliver's outline) is left to the second pass.
+    if cols.is_nan() || rows.is_nan() || cols * rows > (4 * MAX_GRID_CELLS) as f64 {
+        return;
+    }
+    let (cols, rows) = (cols as usize, rows as usize);
+    let cell_of = |p: Coord<f64>| -> (usize, usize) {
+        let c = (((p.x - lo.x) / spacing).floor() as usize).min(cols - 1);
+        let r = (((p.y - lo.y) / spacing).floor() as usize).min(rows - 1);
+        (r, c)
+    };
+    // The vertices by cell, as one array and the start of each cell in it.
+    let mut start = vec![0usize; rows * cols + 1];
+    let cells: Vec<usize> = pos
+        .iter()
+        .map(|&p| {
+            let (r, c) = cell_of(p);
+            r * cols + c
+        })
+        .collect();
+    for &k in &cells {
+        start[k + 1] += 1;
+    }
+    for k in 0..rows * cols {
+        start[k + 1] += start[k];
+    }
+    let mut fill = start.clone();
+    let mut by_cell = vec![0usize; n];
+    for (i, &k) in cells.iter().enumerate() {
+        by_cell[fill[k]] = i;
+        fill[k] += 1;
+    }
+    let reach2 = (NEAR_CELLS as f64 * spacing).powi(2);
+    let mut pairs: Vec<(ByDist, usize, usize)> = Vec::new();
+    let mut mine_near: Vec<(ByDist, usize)> = Vec::new();
+    for i in 0..n {
+        let ri = find(parent, i);
+        if ri == big {
+            continue;
+        }
+        let (r, c) = cell_of(pos[i]);
+        let (r0, r1) = (
+            r.saturating_sub(NEAR_CELLS as usize),
+            (r + NEAR_CELLS as usize).min(rows - 1),
+        );
+        let (c0, c1) = (
+            c.saturating_sub(NEAR_CELLS as usize),
+            (c + NEAR_CELLS as usize).min(cols - 1),
+        );
+        mine_near.clear();
+        for rr in r0..=r1 {
+            for k in rr * cols + c0..=rr * cols + c1 {
+                for &j in &by_cell[start[k]..start[k + 1]] {
+                    let (dx, dy) = (pos[j].x - pos[i].x, pos[j].y - pos[i].y);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 <= reach2 && find(parent, j) != ri {
+                        mine_near.push((ByDist(d2), j));
+                    }
+                }
+            }
+        }
+        if mine_near.len() > NEAR_KEPT {
+            mine_near.select_nth_unstable(NEAR_KEPT - 1);
+            mine_near.truncate(NEAR_KEPT);
+        }
+        pairs.extend(mine_near.iter().map(|&(d, j)| (d, i.min(j), i.max(j))));
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    for (_, i, j) in pairs {
+        let (ri, rj) = (find(parent, i), find(parent, j));
+        if ri == rj {
+            continue;
+        }
+        if segment_within(poly, pos[i], pos[j], 0.0) && ctx.walls_ok(net, pos[i], pos[j]) {
+            net.edge(mine[i], mine[j], None);
+            parent[ri] = rj;
+        }
     }
 }
 

@@ -406,7 +406,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     let exact_from_batch = (stop_at.is_none()
         && super::auto::eval_units(p) * (BATCH * EXACT_PHASE_BATCHES) as f64
             <= super::auto::UNITS_PER_SECOND)
-        .then(|| (max_batches as f64 * (1.0 - EXACT_PHASE_SHARE)) as usize);
+        .then_some((max_batches as f64 * (1.0 - EXACT_PHASE_SHARE)) as usize);
     let mut exact_phase = false;
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5ca1_ab1e);
     let mut stale = 0usize;

@@ -47,6 +47,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> trailprint::Result<()> {
         }),
         name: args.name.clone(),
         spacing_m: args.spacing,
+        ..ImportOptions::default()
     };
     let result = import_path(&args.file, &options)?;
     let origin = args.file.display().to_string();
