@@ -4,14 +4,13 @@
 use std::sync::Arc;
 
 use trailprint::Building;
-use trailprint::samples::SurveyorModel;
-use trailprint::session::Surveyor;
+use trailprint::surveyor::Surveyor;
 
 use crate::building::KernelParams;
 use crate::{Result, TrailprintError};
 
-/// Who walks the survey: the planner's surveyor model (SPEC section 4) plus what the
-/// session needs to follow the walk (a human's step length, a robot's speed).
+/// Who walks the survey: the core's [`Surveyor`] (SPEC section 4), field for field, so the
+/// two conversions below copy and invent nothing.
 #[derive(Debug, Clone, Copy, PartialEq, uniffi::Enum)]
 pub enum SurveyorProfile {
     /// A robot labelled by SLAM: one scan every `interval_m` metres (paper: 0.5).
@@ -33,54 +32,6 @@ pub enum SurveyorProfile {
         /// A turn sharper than this is a check-in, degrees (default 30).
         turn_threshold_deg: f64,
     },
-}
-
-/// Step length assumed for a plan's stored surveyor model, which does not carry one.
-const DEFAULT_STEP_LENGTH_M: f64 = trailprint::session::DEFAULT_STEP_LENGTH_M;
-
-impl From<SurveyorProfile> for SurveyorModel {
-    fn from(p: SurveyorProfile) -> Self {
-        match p {
-            SurveyorProfile::Robot { interval_m, .. } => SurveyorModel::Robot {
-                interval: interval_m,
-            },
-            SurveyorProfile::Human {
-                speed_mps,
-                scan_interval_s,
-                step_error,
-                turn_threshold_deg,
-                ..
-            } => SurveyorModel::Human {
-                speed: speed_mps,
-                scan_interval: scan_interval_s,
-                step_error,
-                turn_threshold_deg,
-            },
-        }
-    }
-}
-
-impl From<SurveyorModel> for SurveyorProfile {
-    fn from(m: SurveyorModel) -> Self {
-        match m {
-            SurveyorModel::Robot { interval } => SurveyorProfile::Robot {
-                interval_m: interval,
-                speed_mps: Surveyor::robot().speed_mps(),
-            },
-            SurveyorModel::Human {
-                speed,
-                scan_interval,
-                step_error,
-                turn_threshold_deg,
-            } => SurveyorProfile::Human {
-                step_length_m: DEFAULT_STEP_LENGTH_M,
-                speed_mps: speed,
-                scan_interval_s: scan_interval,
-                step_error,
-                turn_threshold_deg,
-            },
-        }
-    }
 }
 
 impl From<Surveyor> for SurveyorProfile {

@@ -70,8 +70,8 @@ pub struct PlanSummary {
     pub elapsed_ms: u64,
     pub seed: Option<u64>,
     pub kernel: KernelParams,
-    /// The surveyor model the plan was made for (null if the store holds one this version
-    /// cannot read).
+    /// The surveyor the plan was made for (null for a walk handed to a session rather
+    /// than planned).
     pub surveyor: Option<SurveyorProfile>,
     pub created_ms: i64,
     /// Why the planner stopped (`completed`, `optimal`, `time_limit`, `cancelled`), for
@@ -86,12 +86,10 @@ impl From<trailprint::store::StoredPlan> for PlanSummary {
         PlanSummary {
             id: p.id,
             building_id: p.building_id,
-            surveyor: serde_json::from_value::<trailprint::samples::SurveyorModel>(r.surveyor)
-                .ok()
-                .map(Into::into),
+            surveyor: r.surveyor.map(Into::into),
             start: r.start,
             end: r.end,
-            algorithm: r.algorithm,
+            algorithm: r.algorithm.name().to_string(),
             walk: r.walk,
             length_m: r.length_m,
             budget_m: r.budget_m,

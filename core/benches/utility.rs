@@ -9,7 +9,7 @@ use std::sync::Arc;
 use criterion::{Criterion, criterion_group, criterion_main};
 use trailprint::building::Building;
 use trailprint::gp::Kernel;
-use trailprint::samples::{SurveyorModel, sample_walk};
+use trailprint::samples::{Surveyor, sample_walk};
 use trailprint::utility::reference::{Observation, pilot_observations};
 use trailprint::utility::{UtilityEngine, reference_utility};
 
@@ -75,7 +75,7 @@ fn walk_of(b: &Building, budget: f64) -> Vec<usize> {
 }
 
 fn bench_building(c: &mut Criterion, name: &str, b: Arc<Building>, kernel: Kernel, budget: f64) {
-    let model = SurveyorModel::robot();
+    let model = Surveyor::robot();
     let walk = walk_of(&b, budget);
     let samples = sample_walk(&b, &walk, &model, &kernel).expect("samples");
     eprintln!(

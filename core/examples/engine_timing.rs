@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use trailprint::building::Building;
 use trailprint::gp::Kernel;
-use trailprint::samples::{SurveyorModel, sample_walk};
+use trailprint::samples::{Surveyor, sample_walk};
 use trailprint::utility::reference::{Observation, pilot_observations};
 use trailprint::utility::{UtilityEngine, reference_utility};
 
@@ -30,7 +30,7 @@ fn main() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/area-two.json");
     let b = Arc::new(Building::load(&path).expect("area-two"));
     let k = Kernel::new(103.22, 32.17, 3.3);
-    let model = SurveyorModel::robot();
+    let model = Surveyor::robot();
     // Down the corridor and back: 140 m.
     let mut walk = vec![0usize];
     let mut len = 0.0;

@@ -21,7 +21,7 @@ fn main() -> trailprint::Result<()> {
         let p = Problem::new(
             b.clone(),
             k,
-            trailprint::samples::SurveyorModel::robot(),
+            trailprint::surveyor::Surveyor::robot(),
             s,
             t,
             budget,

@@ -18,8 +18,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use trailprint::Building;
 use trailprint::gp::{Kernel, Point};
-use trailprint::samples::SurveyorModel;
 use trailprint::session::IncrementalPosterior;
+use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
 use trailprint::utility::{Observation, UtilityEngine};
 
@@ -65,7 +65,7 @@ fn main() -> trailprint::Result<()> {
         carry = s - len;
         at = next;
     }
-    let engine = UtilityEngine::new(b.clone(), kernel, SurveyorModel::Robot { interval: 0.5 })?;
+    let engine = UtilityEngine::new(b.clone(), kernel, Surveyor::robot())?;
     let mut post = IncrementalPosterior::new(&b, kernel)?;
     let built = Instant::now();
     println!(

@@ -20,7 +20,7 @@ use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
-use trailprint::samples::SurveyorModel;
+use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
 
 fn ranks(v: &[f64]) -> Vec<f64> {
@@ -48,9 +48,9 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
 fn main() -> trailprint::Result<()> {
     let human = std::env::args().any(|a| a == "human");
     let model = if human {
-        SurveyorModel::human()
+        Surveyor::human()
     } else {
-        SurveyorModel::robot()
+        Surveyor::robot()
     };
     let cases = [
         ("campus", 2usize, 6usize, 48.0, 8.0),

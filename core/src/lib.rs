@@ -36,6 +36,7 @@ pub mod render;
 pub mod samples;
 pub mod session;
 pub mod store;
+pub mod surveyor;
 #[cfg(feature = "research")]
 pub mod synth;
 pub mod team;

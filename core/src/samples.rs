@@ -15,116 +15,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
+pub use crate::surveyor::Surveyor;
 use crate::{Error, Result};
 
 /// Arc-length tolerance of SPEC sections 3 and 4.
 pub const ARC_EPS: f64 = 1e-9;
-
-/// How the walk is surveyed: who walks and how often a scan is taken.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "model", rename_all = "snake_case")]
-pub enum SurveyorModel {
-    /// The paper's robot: a scan every `interval` metres (speed times scan period), labels
-    /// from SLAM without extra noise.
-    Robot { interval: f64 },
-    /// A person with a step counter.
-    Human {
-        /// Walking speed, m/s (default 1.2).
-        speed: f64,
-        /// Time between completed Wi-Fi scans, s (default 4).
-        scan_interval: f64,
-        /// Relative step-length error `eps` (default 0.05).
-        step_error: f64,
-        /// A vertex where the walk turns by more than this is a check-in (default 30).
-        turn_threshold_deg: f64,
-    },
-}
-
-impl Default for SurveyorModel {
-    fn default() -> Self {
-        SurveyorModel::robot()
-    }
-}
-
-impl SurveyorModel {
-    /// The paper's robot, one scan every 0.5 m.
-    pub fn robot() -> Self {
-        SurveyorModel::Robot { interval: 0.5 }
-    }
-
-    /// A human surveyor with the defaults of SPEC section 4.
-    pub fn human() -> Self {
-        SurveyorModel::Human {
-            speed: 1.2,
-            scan_interval: 4.0,
-            step_error: 0.05,
-            turn_threshold_deg: 30.0,
-        }
-    }
-
-    /// Distance between consecutive samples, metres.
-    pub fn spacing(&self) -> f64 {
-        match *self {
-            SurveyorModel::Robot { interval } => interval,
-            SurveyorModel::Human {
-                speed,
-                scan_interval,
-                ..
-            } => speed * scan_interval,
-        }
-    }
-
-    /// Checks the parameters; the message names the bad one.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |name: &str, v: f64, want: &str| {
-            Err(Error::InvalidRequest(format!(
-                "surveyor model: {name} must be {want}, got {v}"
-            )))
-        };
-        match *self {
-            SurveyorModel::Robot { interval } => {
-                if !interval.is_finite() || interval < 0.01 {
-                    return bad("interval", interval, "at least 0.01 m");
-                }
-            }
-            SurveyorModel::Human {
-                speed,
-                scan_interval,
-                step_error,
-                turn_threshold_deg,
-            } => {
-                if !speed.is_finite() || speed <= 0.0 {
-                    return bad("speed", speed, "a positive number of m/s");
-                }
-                if !scan_interval.is_finite() || scan_interval <= 0.0 {
-                    return bad(
-                        "scan interval",
-                        scan_interval,
-                        "a positive number of seconds",
-                    );
-                }
-                if speed * scan_interval < 0.01 {
-                    return bad(
-                        "speed x scan interval",
-                        speed * scan_interval,
-                        "at least 0.01 m",
-                    );
-                }
-                if !step_error.is_finite() || !(0.0..=1.0).contains(&step_error) {
-                    return bad("step error", step_error, "between 0 and 1");
-                }
-                if !turn_threshold_deg.is_finite() || !(0.0..=180.0).contains(&turn_threshold_deg) {
-                    return bad(
-                        "turn threshold",
-                        turn_threshold_deg,
-                        "between 0 and 180 degrees",
-                    );
-                }
-            }
-        }
-        Ok(())
-    }
-}
 
 /// One sample of a walk.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -225,7 +120,7 @@ pub fn is_turn_checkin(
 /// it with the noise it has if the walk ends there.
 #[derive(Debug, Clone)]
 pub struct WalkSampler {
-    model: SurveyorModel,
+    model: Surveyor,
     kernel: Kernel,
     spacing: f64,
     /// Vertices so far (only the last two matter, the rest is kept for callers).
@@ -242,7 +137,7 @@ pub struct WalkSampler {
 
 impl WalkSampler {
     /// Starts a walk at `start`; the start is a check-in and the first sample is there.
-    pub fn new(building: &Building, start: usize, model: SurveyorModel, kernel: Kernel) -> Self {
+    pub fn new(building: &Building, start: usize, model: Surveyor, kernel: Kernel) -> Self {
         let spacing = model.spacing();
         let pos = building.vertices[start].pos;
         WalkSampler {
@@ -278,21 +173,21 @@ impl WalkSampler {
     }
 
     /// The surveyor model in use.
-    pub fn model(&self) -> SurveyorModel {
+    pub fn model(&self) -> Surveyor {
         self.model
     }
 
     fn noise_for(&self, u: f64) -> f64 {
         match self.model {
-            SurveyorModel::Robot { .. } => 0.0,
-            SurveyorModel::Human { step_error, .. } => self.kernel.label_noise(step_error * u),
+            Surveyor::Robot { .. } => 0.0,
+            Surveyor::Human { step_error, .. } => self.kernel.label_noise(step_error * u),
         }
     }
 
     fn make(&self, pos: Point, arc: f64) -> Sample {
         let u = match self.model {
-            SurveyorModel::Robot { .. } => 0.0,
-            SurveyorModel::Human { .. } => {
+            Surveyor::Robot { .. } => 0.0,
+            Surveyor::Human { .. } => {
                 if arc <= self.last_checkin + ARC_EPS {
                     0.0
                 } else {
@@ -327,7 +222,7 @@ impl WalkSampler {
         // Is the current end vertex a check-in? (The start already is.)
         if self.walk.len() >= 2 {
             let prev = self.walk[self.walk.len() - 2];
-            if let SurveyorModel::Human {
+            if let Surveyor::Human {
                 turn_threshold_deg, ..
             } = self.model
                 && is_turn_checkin(building, prev, at, next, turn_threshold_deg)
@@ -378,7 +273,7 @@ impl WalkSampler {
 pub fn sample_walk(
     building: &Building,
     walk: &[usize],
-    model: &SurveyorModel,
+    model: &Surveyor,
     kernel: &Kernel,
 ) -> Result<Vec<Sample>> {
     let Some(&start) = walk.first() else {
@@ -427,8 +322,7 @@ mod tests {
         let k = Kernel::new(1.0, 1.0, 1.0);
         // a -> b -> c -> b : 2 + 1.5 + 1.5 = 5 m, every 0.75 m: arcs 0, .75, ..., 4.5 (7 samples).
         let walk = b.resolve_walk(&["a", "b", "c", "b"]).expect("walk");
-        let s =
-            sample_walk(&b, &walk, &SurveyorModel::Robot { interval: 0.75 }, &k).expect("samples");
+        let s = sample_walk(&b, &walk, &Surveyor::robot_every(0.75), &k).expect("samples");
         assert_eq!(s.len(), 7);
         let expect = [
             (0.0, 0.0),
@@ -447,8 +341,7 @@ mod tests {
             assert_eq!(got.extra_noise, 0.0);
         }
         // Exactly at the end: 5 m with a 1.25 m interval gives 5 samples, the last at b.
-        let s =
-            sample_walk(&b, &walk, &SurveyorModel::Robot { interval: 1.25 }, &k).expect("samples");
+        let s = sample_walk(&b, &walk, &Surveyor::robot_every(1.25), &k).expect("samples");
         assert_eq!(s.len(), 5);
         assert!((s[4].pos.x - 2.0).abs() < 1e-12 && s[4].pos.y.abs() < 1e-12);
     }
@@ -457,9 +350,10 @@ mod tests {
     fn human_noise_restarts_at_checkins() {
         let b = line();
         let k = Kernel::new(10.0, 5.0, 1.0);
-        let model = SurveyorModel::Human {
-            speed: 1.0,
-            scan_interval: 0.5,
+        let model = Surveyor::Human {
+            step_length_m: 0.7,
+            speed_mps: 1.0,
+            scan_interval_s: 0.5,
             step_error: 0.1,
             turn_threshold_deg: 30.0,
         };
@@ -499,8 +393,7 @@ mod tests {
           "edges":[{"a":"a","b":"b"},{"a":"b","b":"c","length":4}]}"#;
         let b = Building::from_json(text, "s").expect("valid");
         let k = Kernel::new(1.0, 1.0, 1.0);
-        let s =
-            sample_walk(&b, &[0, 1, 2], &SurveyorModel::Robot { interval: 1.0 }, &k).expect("s");
+        let s = sample_walk(&b, &[0, 1, 2], &Surveyor::robot_every(1.0), &k).expect("s");
         // arcs 0..5: on the stair (1..5) the fractions are 0, .25, .5, .75, 1.
         let floors: Vec<i64> = s.iter().map(|s| s.pos.floor).collect();
         assert_eq!(floors, vec![0, 0, 0, 0, 1, 1]);

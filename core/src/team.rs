@@ -240,7 +240,7 @@ mod tests {
     use super::*;
     use crate::gp::Kernel;
     use crate::plan::Algorithm;
-    use crate::samples::SurveyorModel;
+    use crate::surveyor::Surveyor;
 
     fn area_two() -> Arc<Building> {
         let path =
@@ -252,7 +252,7 @@ mod tests {
         // Genetic without a time limit: deterministic for a seed, whatever the machine.
         let mut settings = PlanSettings {
             algorithm: Algorithm::Genetic,
-            model: SurveyorModel::Robot { interval: 1.0 },
+            model: Surveyor::robot_every(1.0),
             seed: 3,
             ..PlanSettings::default()
         };

@@ -12,7 +12,7 @@ use trailprint::plan::coverage::reversals;
 use trailprint::plan::{
     Algorithm, Control, Observer, PlanRequest, Problem, Progress, Termination, plan,
 };
-use trailprint::samples::SurveyorModel;
+use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
 use trailprint::utility::UtilityEngine;
 
@@ -259,7 +259,7 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
     let mut req = PlanRequest::new(&start, &start, budget, k);
-    req.model = SurveyorModel::human();
+    req.model = Surveyor::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     let p = Problem::new(
         b.clone(),
@@ -283,7 +283,7 @@ fn auto_never_returns_less_than_a_walk_it_has_shown() {
     let _serial = crate::serial();
     let (b, k) = office();
     let start = b.vertices[0].id.clone();
-    for (model, frac) in [(SurveyorModel::robot(), 1.0), (SurveyorModel::robot(), 0.5)] {
+    for (model, frac) in [(Surveyor::robot(), 1.0), (Surveyor::robot(), 0.5)] {
         let budget = frac * b.total_edge_length();
         let mut req = PlanRequest::new(&start, &start, budget, k);
         req.model = model;

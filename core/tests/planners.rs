@@ -21,7 +21,7 @@ use trailprint::plan::{
     Algorithm, Control, Observer, Params, PlanRequest, PlanResult, Problem, Progress, Run, Solver,
     Termination, plan,
 };
-use trailprint::samples::SurveyorModel;
+use trailprint::surveyor::Surveyor;
 use trailprint::utility::UtilityEngine;
 
 /// Checks what every plan promises: a real walk from the start to the end within the
@@ -69,7 +69,7 @@ fn paper_greedy_stops_when_the_best_ratio_does_not_fit() {
     let b = Arc::new(Building::from_json(text, "spurs").expect("building"));
     let (s, a, far) = (0usize, 1usize, 2usize);
     let budget = 25.0;
-    let e = UtilityEngine::new(b.clone(), kernel(), SurveyorModel::robot()).expect("engine");
+    let e = UtilityEngine::new(b.clone(), kernel(), Surveyor::robot()).expect("engine");
     let u0 = e.utility(&[s]).expect("u");
     let ua = e.utility(&[s, a, s]).expect("u");
     let ub = e.utility(&[s, far, s]).expect("u");

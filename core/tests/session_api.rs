@@ -35,7 +35,7 @@ fn planned(
         .id;
     let kernel = fit_kernel(&b.pilot).expect("fit").kernel;
     let req = PlanRequest {
-        model: surveyor.model(),
+        model: surveyor,
         algorithm,
         seed: 7,
         time_limit: Some(std::time::Duration::from_millis(500)),
@@ -304,7 +304,7 @@ fn sessions_are_send_and_replay_is_fast() {
         &trailprint::session::ReplanRequest {
             building: &b,
             kernel,
-            model: Surveyor::robot().model(),
+            model: Surveyor::robot(),
             prior: &[],
             start: 0,
             end: b.len() - 1,

@@ -313,9 +313,9 @@ fn plan_record() -> PlanRecord {
         start: "g0".into(),
         end: "f1".into(),
         budget_m: 20.0,
-        surveyor: serde_json::json!({"human": {"speed": 1.2, "interval_s": 4.0, "eps": 0.05}}),
+        surveyor: Some(trailprint::surveyor::Surveyor::human()),
         kernel: Kernel::new(40.0, 6.0, 9.0),
-        algorithm: "genetic".into(),
+        algorithm: trailprint::plan::Algorithm::Genetic.into(),
         seed: Some(u64::MAX - 1),
         walk: ["g0", "g1", "g2", "f2", "f1"].map(String::from).to_vec(),
         length_m: 4.5 + 3.5 + 6.0 + 5.0,
@@ -324,6 +324,64 @@ fn plan_record() -> PlanRecord {
         elapsed_ms: 812,
         created_ms: 1_700_000_000_000,
     }
+}
+
+/// Plans saved before the surveyor types were merged hold the planner's older JSON form
+/// (`{"model": ...}`); they read back as the same surveyor, and a shape no version of the
+/// planner wrote reads as a plan without a recorded surveyor instead of failing the list.
+#[test]
+fn plans_stored_with_older_surveyor_forms_are_read() {
+    use trailprint::surveyor::Surveyor;
+    let store = Store::open_in_memory().expect("store");
+    let id = import(&store, &fixtures().join("good/two_floors.json"));
+    let pid = store.save_plan(id, &plan_record()).expect("save");
+    let set = |text: &str| {
+        store
+            .with_connection(|c| {
+                c.execute(
+                    "UPDATE plans SET surveyor = ?1 WHERE id = ?2",
+                    rusqlite::params![text, pid],
+                )?;
+                Ok(())
+            })
+            .expect("update");
+        store.load_plan(pid).expect("load").record.surveyor
+    };
+    let human = Surveyor::Human {
+        step_length_m: trailprint::surveyor::DEFAULT_STEP_LENGTH_M,
+        speed_mps: 1.1,
+        scan_interval_s: 3.0,
+        step_error: 0.1,
+        turn_threshold_deg: 40.0,
+    };
+    assert_eq!(
+        set(
+            r#"{"model":"human","speed":1.1,"scan_interval":3.0,"step_error":0.1,"turn_threshold_deg":40.0}"#
+        ),
+        Some(human)
+    );
+    assert_eq!(
+        set(r#"{"model":"robot","interval":0.8}"#),
+        Some(Surveyor::robot_every(0.8))
+    );
+    assert_eq!(set("null"), None);
+    assert_eq!(set(r#"{"robot":{"speed":0.5,"interval_s":1.0}}"#), None);
+    assert_eq!(store.list_plans(id).expect("list").len(), 1);
+    // Saved again, a plan is written in the current form.
+    let mut p = plan_record();
+    p.surveyor = Some(human);
+    let again = store.save_plan(id, &p).expect("save");
+    let text: String = store
+        .with_connection(|c| {
+            Ok(
+                c.query_row("SELECT surveyor FROM plans WHERE id = ?1", [again], |r| {
+                    r.get(0)
+                })?,
+            )
+        })
+        .expect("read");
+    assert!(text.contains(r#""kind":"human""#), "{text}");
+    assert_eq!(store.load_plan(again).expect("load").record, p);
 }
 
 #[test]
@@ -337,7 +395,7 @@ fn plans_round_trip_and_walks_are_checked() {
     assert_eq!(loaded.building_id, id);
     let mut greedy = p.clone();
     greedy.seed = None;
-    greedy.algorithm = "greedy".into();
+    greedy.algorithm = trailprint::plan::Algorithm::Greedy.into();
     greedy.created_ms += 1;
     store.save_plan(id, &greedy).expect("save");
     let list = store.list_plans(id).expect("list");

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use proptest::prelude::*;
 use trailprint::building::Building;
 use trailprint::gp::{Kernel, Point};
-use trailprint::samples::{SurveyorModel, sample_walk};
+use trailprint::samples::{Surveyor, sample_walk};
 use trailprint::utility::reference::{Observation, pilot_observations};
 use trailprint::utility::{UtilityEngine, reference_utility};
 
@@ -17,7 +17,7 @@ fn instance(name: &str) -> Arc<Building> {
     Arc::new(Building::load(&path).expect("shared instance"))
 }
 
-fn reference(b: &Building, k: &Kernel, model: &SurveyorModel, walk: &[usize]) -> f64 {
+fn reference(b: &Building, k: &Kernel, model: &Surveyor, walk: &[usize]) -> f64 {
     let mut obs = pilot_observations(&b.pilot_points());
     for s in sample_walk(b, walk, model, k).expect("samples") {
         obs.push(Observation::from(&s));
@@ -52,7 +52,7 @@ fn one_vertex_one_sample_in_closed_form() {
     let b = Arc::new(Building::from_json(text, "one").expect("valid"));
     let k = Kernel::new(40.0, 6.0, 9.0);
     // Two vertices 999 m apart are nearly independent; compute the exact 2x2 case.
-    let e = UtilityEngine::new(b.clone(), k, SurveyorModel::robot()).expect("engine");
+    let e = UtilityEngine::new(b.clone(), k, Surveyor::robot()).expect("engine");
     let got = e.utility(&[0]).expect("utility");
     // One sample at v: Sigma = A - b b^T / (sf2 + sn2), b = (sf2, k(v,w)).
     let (sf2, sn2) = (k.sf2, k.sn2);
@@ -85,7 +85,7 @@ fn engine_matches_reference_on_a_140m_walk_of_area_two() {
         }
         walk.push(w);
     }
-    for model in [SurveyorModel::robot(), SurveyorModel::human()] {
+    for model in [Surveyor::robot(), Surveyor::human()] {
         let e = UtilityEngine::new(b.clone(), K2, model).expect("engine");
         let fast = e.utility(&walk).expect("fast");
         let slow = reference(&b, &K2, &model, &walk);
@@ -118,11 +118,11 @@ fn back_and_forth_walks_merge_coincident_samples_exactly() {
         );
     }
     let k = Kernel::new(60.0, 8.0, 2.0);
-    for model in [SurveyorModel::robot(), SurveyorModel::human()] {
+    for model in [Surveyor::robot(), Surveyor::human()] {
         let samples = sample_walk(&b, &walk, &model, &k).expect("samples");
         let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
         let merged = merge_coincident(&obs, k.sn2);
-        if matches!(model, SurveyorModel::Robot { .. }) {
+        if matches!(model, Surveyor::Robot { .. }) {
             // 56 m of walk over 14 m of distinct track: 113 samples on 29 places.
             assert!(
                 merged.len() * 3 < obs.len(),
@@ -156,9 +156,9 @@ proptest! {
         let b = instance("area-one.json");
         let k = Kernel::new(sf2, ell, sn2);
         let model = if human {
-            SurveyorModel::Human { speed: 1.0, scan_interval: 1.3, step_error: 0.1, turn_threshold_deg: 30.0 }
+            Surveyor::Human { step_length_m: 0.7, speed_mps: 1.0, scan_interval_s: 1.3, step_error: 0.1, turn_threshold_deg: 30.0 }
         } else {
-            SurveyorModel::Robot { interval: 0.7 }
+            Surveyor::robot_every(0.7)
         };
         let walk = random_walk(&b, start, &choices);
         let e = UtilityEngine::new(b.clone(), k, model).expect("engine");
@@ -188,7 +188,7 @@ proptest! {
     #[test]
     fn rewind_restores_and_branches(start in 0usize..61, a in proptest::collection::vec(0usize..6, 1..12), c in proptest::collection::vec(0usize..6, 1..12)) {
         let b = instance("area-two.json");
-        let e = UtilityEngine::new(b.clone(), K2, SurveyorModel::human()).expect("engine");
+        let e = UtilityEngine::new(b.clone(), K2, Surveyor::human()).expect("engine");
         let prefix = random_walk(&b, start, &a);
         let mut st = e.start(prefix[0]).expect("start");
         for &v in &prefix[1..] { st.push(v).expect("push"); }
@@ -211,7 +211,7 @@ proptest! {
         let b = instance("area-one.json");
         let k = Kernel::new(168.4, 23.86, 1.08);
         let w = random_walk(&b, start, &choices);
-        let s = sample_walk(&b, &w, &SurveyorModel::human(), &k).expect("samples");
+        let s = sample_walk(&b, &w, &Surveyor::human(), &k).expect("samples");
         prop_assert_eq!(s[0].extra_noise, 0.0);
         for pair in s.windows(2) {
             let (p, q) = (pair[0], pair[1]);
@@ -228,7 +228,7 @@ proptest! {
 #[test]
 fn parallel_evaluation_matches_sequential() {
     let b = instance("area-two.json");
-    let e = UtilityEngine::new(b.clone(), K2, SurveyorModel::robot()).expect("engine");
+    let e = UtilityEngine::new(b.clone(), K2, Surveyor::robot()).expect("engine");
     let walks: Vec<Vec<usize>> = (0..16)
         .map(|s| random_walk(&b, s, &(0..30).map(|i| (i * s + 1) % 5).collect::<Vec<_>>()))
         .collect();
@@ -242,9 +242,9 @@ fn parallel_evaluation_matches_sequential() {
 fn observations_api_agrees_with_walks() {
     let b = instance("area-one.json");
     let k = Kernel::new(168.4, 23.86, 1.08);
-    let e = UtilityEngine::new(b.clone(), k, SurveyorModel::human()).expect("engine");
+    let e = UtilityEngine::new(b.clone(), k, Surveyor::human()).expect("engine");
     let walk = random_walk(&b, 0, &[1, 2, 3, 1, 0, 2]);
-    let obs: Vec<Observation> = sample_walk(&b, &walk, &SurveyorModel::human(), &k)
+    let obs: Vec<Observation> = sample_walk(&b, &walk, &Surveyor::human(), &k)
         .expect("s")
         .iter()
         .map(Observation::from)
@@ -252,7 +252,7 @@ fn observations_api_agrees_with_walks() {
     let a = e.utility_of_observations(&obs).expect("u");
     assert!(rel(a, e.utility(&walk).expect("u")) < 1e-12);
     // Conditioning the engine on those observations leaves nothing for the same walk to add.
-    let e2 = UtilityEngine::with_prior(b.clone(), k, SurveyorModel::human(), &obs).expect("engine");
+    let e2 = UtilityEngine::with_prior(b.clone(), k, Surveyor::human(), &obs).expect("engine");
     assert!(rel(e2.prior_utility().expect("u"), a) < 1e-12);
     let _ = Point::new(0.0, 0.0, 0);
 }
@@ -299,7 +299,7 @@ proptest! {
     ) {
         let b = two_floors();
         let k = Kernel::new(sf2, ell, sn2);
-        let model = if human { SurveyorModel::human() } else { SurveyorModel::Robot { interval: 0.5 } };
+        let model = if human { Surveyor::human() } else { Surveyor::robot() };
         // Start at the stair foot so that many walks change floor.
         let start = b.vertex_index("a0_0").expect("a0_0");
         let walk = random_walk(&b, start, &choices);

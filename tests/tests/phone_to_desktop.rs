@@ -120,13 +120,13 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
     let engine = trailprint::utility::UtilityEngine::new(
         Arc::new(building.clone()),
         kernel,
-        trailprint::samples::SurveyorModel::robot(),
+        trailprint::surveyor::Surveyor::robot(),
     )
     .expect("engine");
     let with_prior = trailprint::utility::UtilityEngine::with_prior(
         Arc::new(building),
         kernel,
-        trailprint::samples::SurveyorModel::robot(),
+        trailprint::surveyor::Surveyor::robot(),
         &prior,
     )
     .expect("engine");

@@ -2,7 +2,7 @@
 //! areas and on generated buildings.
 
 use super::*;
-use crate::samples::{SurveyorModel, sample_walk};
+use crate::samples::{Surveyor, sample_walk};
 use crate::synth::{DEMO_BUILDING_JSON, SynthParams, generate};
 
 fn fixture(name: &str) -> Building {
@@ -160,7 +160,7 @@ fn a_dense_walk_beats_the_pilot_data_alone_on_a_generated_building() {
     let ev = Evaluator::new(&b, &DEMO, EvalOptions::default()).expect("evaluator");
     let walk = dfs_tour(&b);
     b.check_walk(&walk).expect("a walk");
-    let samples = sample_walk(&b, &walk, &SurveyorModel::robot(), &DEMO).expect("samples");
+    let samples = sample_walk(&b, &walk, &Surveyor::robot(), &DEMO).expect("samples");
     let mut pilot_only = 0.0;
     let mut dense = 0.0;
     for seed in 0..3 {
@@ -188,7 +188,7 @@ fn human_label_noise_enters_the_map_and_is_deterministic() {
     let b = Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo");
     let ev = Evaluator::new(&b, &DEMO, EvalOptions::default()).expect("evaluator");
     let walk = dfs_tour(&b);
-    let human = sample_walk(&b, &walk, &SurveyorModel::human(), &DEMO).expect("samples");
+    let human = sample_walk(&b, &walk, &Surveyor::human(), &DEMO).expect("samples");
     assert!(human.iter().any(|s| s.extra_noise > 0.0));
     let a = ev.evaluate_samples(&human, 3).expect("a");
     assert_eq!(a, ev.evaluate_samples(&human, 3).expect("again"));

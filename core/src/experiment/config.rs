@@ -7,7 +7,7 @@ use serde::Serialize;
 use crate::eval::EvalOptions;
 use crate::gp::Kernel;
 use crate::plan::{Algorithm, Params};
-use crate::samples::SurveyorModel;
+use crate::surveyor::Surveyor;
 use crate::{Error, Result};
 
 /// What to run.
@@ -24,7 +24,7 @@ pub struct ExperimentConfig {
     /// Runs per algorithm and budget.
     pub runs: usize,
     pub kernel: Kernel,
-    pub model: SurveyorModel,
+    pub model: Surveyor,
     /// Master seed; the seeds of every run derive from it.
     pub seed: u64,
     /// Time limit of every plan (`None`: the algorithm's default, 2 s for `auto`).
@@ -83,7 +83,7 @@ impl ExperimentConfig {
             algorithms,
             runs,
             kernel,
-            model: SurveyorModel::default(),
+            model: Surveyor::default(),
             seed: 1,
             time_limit: None,
             time_limits: Vec::new(),

@@ -12,7 +12,7 @@ use std::time::Duration;
 use crate::Result;
 use crate::building::Building;
 use crate::gp::Kernel;
-use crate::samples::SurveyorModel;
+use crate::surveyor::Surveyor;
 
 use super::{Algorithm, Control, Params, PlanRequest, Termination, plan};
 
@@ -32,7 +32,7 @@ pub struct BenchConfig {
     pub algorithms: Vec<Algorithm>,
     pub seeds: Vec<u64>,
     pub params: Params,
-    pub model: SurveyorModel,
+    pub model: Surveyor,
     /// Time limit per algorithm (`None`: the algorithm's default).
     pub time_limits: BTreeMap<String, Duration>,
 }

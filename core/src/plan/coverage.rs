@@ -384,7 +384,7 @@ mod tests {
     use crate::building::Building;
     use crate::gp::Kernel;
     use crate::plan::{Control, Run};
-    use crate::samples::SurveyorModel;
+    use crate::surveyor::Surveyor;
 
     /// A 4 x 3 lattice of 2 m cells.
     fn lattice() -> Arc<Building> {
@@ -416,7 +416,7 @@ mod tests {
             ell: 4.0,
             sn2: 1.0,
         };
-        Problem::new(b.clone(), k, SurveyorModel::robot(), 0, 0, budget).expect("problem")
+        Problem::new(b.clone(), k, Surveyor::robot(), 0, 0, budget).expect("problem")
     }
 
     #[test]

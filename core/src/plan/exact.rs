@@ -56,7 +56,7 @@ use rayon::prelude::*;
 use super::greedy::Greedy;
 use super::local_search::LocalSearch;
 use super::{Algorithm, Outcome, Problem, Run, Solver, Termination, better};
-use crate::samples::SurveyorModel;
+use crate::surveyor::Surveyor;
 use crate::utility::WalkState;
 use crate::{Error, Result};
 
@@ -127,7 +127,7 @@ impl Exact {
 /// Per-sample information bound `c` of rule 2, nats, or `None` when the model is not
 /// the robot.
 pub fn per_sample_bound(p: &Problem) -> Option<(f64, f64)> {
-    let SurveyorModel::Robot { interval: d } = *p.engine.model() else {
+    let Surveyor::Robot { interval_m: d, .. } = *p.engine.model() else {
         return None;
     };
     let k = p.engine.kernel();
@@ -148,7 +148,7 @@ pub fn per_sample_bound(p: &Problem) -> Option<(f64, f64)> {
 
 /// Whether rule 3 holds: robot model and every edge a whole number of sample spacings.
 pub fn lattice(p: &Problem) -> bool {
-    let SurveyorModel::Robot { interval: d } = *p.engine.model() else {
+    let Surveyor::Robot { interval_m: d, .. } = *p.engine.model() else {
         return false;
     };
     p.building.edges.iter().all(|e| {
@@ -311,7 +311,10 @@ impl Solver for Exact {
         };
         let use_table = self.transpositions && lattice(p);
         let last_sample = match *p.engine.model() {
-            SurveyorModel::Robot { interval } => ((p.budget + 2e-9) / interval + 1e-9).floor(),
+            Surveyor::Robot {
+                interval_m: interval,
+                ..
+            } => ((p.budget + 2e-9) / interval + 1e-9).floor(),
             _ => 0.0,
         };
         let mut rng = ChaCha8Rng::seed_from_u64(0x05ee_db0b);

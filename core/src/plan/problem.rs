@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use crate::building::Building;
 use crate::gp::Kernel;
-use crate::samples::SurveyorModel;
+use crate::surveyor::Surveyor;
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
@@ -28,7 +28,7 @@ impl Problem {
     pub fn new(
         building: Arc<Building>,
         kernel: Kernel,
-        model: SurveyorModel,
+        model: Surveyor,
         start: usize,
         end: usize,
         budget: f64,

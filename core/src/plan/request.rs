@@ -7,7 +7,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::gp::Kernel;
-use crate::samples::SurveyorModel;
+use crate::surveyor::Surveyor;
 use crate::{Error, Result};
 
 /// The planning algorithms.
@@ -85,6 +85,78 @@ impl std::fmt::Display for Algorithm {
     }
 }
 
+/// Where a saved walk came from: one of the planners, the session's own replanner, or a
+/// caller that handed the session a walk it did not plan. Stored and exchanged as its
+/// name (`auto`, `greedy`, ..., `session-greedy`, `given`), the `algorithm` of a plan row
+/// and of a bundle's plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PlanOrigin {
+    /// Planned by [`Algorithm`].
+    Planner(Algorithm),
+    /// Replanned mid-session by `session::GreedyReplanner`.
+    SessionGreedy,
+    /// A walk given to the session, not planned.
+    Given,
+}
+
+impl PlanOrigin {
+    /// The stored name.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlanOrigin::Planner(a) => a.name(),
+            PlanOrigin::SessionGreedy => "session-greedy",
+            PlanOrigin::Given => "given",
+        }
+    }
+
+    /// Parses a name as written by [`name`](Self::name).
+    pub fn from_name(s: &str) -> Result<Self> {
+        match s {
+            "session-greedy" => Ok(PlanOrigin::SessionGreedy),
+            "given" => Ok(PlanOrigin::Given),
+            _ => Algorithm::from_name(s)
+                .map(PlanOrigin::Planner)
+                .map_err(|_| {
+                    Error::InvalidRequest(format!(
+                        "unknown plan origin {s:?}, expected an algorithm (auto, greedy, genetic, \
+                     recursive-greedy, ero, exact, coverage), session-greedy or given"
+                    ))
+                }),
+        }
+    }
+}
+
+impl From<Algorithm> for PlanOrigin {
+    fn from(a: Algorithm) -> Self {
+        PlanOrigin::Planner(a)
+    }
+}
+
+impl std::fmt::Display for PlanOrigin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl PartialEq<&str> for PlanOrigin {
+    fn eq(&self, other: &&str) -> bool {
+        self.name() == *other
+    }
+}
+
+impl Serialize for PlanOrigin {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for PlanOrigin {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        PlanOrigin::from_name(&s).map_err(serde::de::Error::custom)
+    }
+}
+
 /// Tuning parameters; each algorithm reads the ones it needs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -156,7 +228,7 @@ pub struct PlanRequest {
     pub budget: f64,
     /// Who walks.
     #[serde(default)]
-    pub model: SurveyorModel,
+    pub model: Surveyor,
     /// Kernel hyperparameters.
     pub kernel: Kernel,
     #[serde(default)]
@@ -183,7 +255,7 @@ pub struct PlanRequest {
 pub struct PlanSettings {
     /// Who walks.
     #[serde(default)]
-    pub model: SurveyorModel,
+    pub model: Surveyor,
     #[serde(default)]
     pub algorithm: Algorithm,
     /// Seed of every random choice.
@@ -203,7 +275,7 @@ impl Default for PlanSettings {
     /// The defaults of [`PlanRequest::new`]: `auto`, robot model, seed 0.
     fn default() -> Self {
         PlanSettings {
-            model: SurveyorModel::default(),
+            model: Surveyor::default(),
             algorithm: Algorithm::default(),
             seed: 0,
             time_limit: None,

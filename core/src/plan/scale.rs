@@ -54,7 +54,7 @@ use rayon::prelude::*;
 use super::coverage::{Leg, leg, reversals, unpace};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::Result;
-use crate::samples::{SurveyorModel, sample_walk};
+use crate::samples::{Surveyor, sample_walk};
 use crate::utility::{Observation, UtilityEngine};
 
 /// Most vertices the surrogate keeps.
@@ -180,7 +180,7 @@ const REVERSAL_PENALTY: f64 = 0.01;
 /// `value` of `walk` less [`REVERSAL_PENALTY`] per reversal for a person (the robot is
 /// judged by value alone).
 fn penalised(p: &Problem, walk: &[usize], value: f64) -> f64 {
-    if matches!(p.engine.model(), SurveyorModel::Human { .. }) {
+    if matches!(p.engine.model(), Surveyor::Human { .. }) {
         value * (1.0 - REVERSAL_PENALTY * reversals(p, walk) as f64).max(0.0)
     } else {
         value
@@ -189,7 +189,7 @@ fn penalised(p: &Problem, walk: &[usize], value: f64) -> f64 {
 
 /// A walk as a person gets it: reversals repaired ([`unpace`]) for the human model.
 fn for_surveyor(p: &Problem, walk: Vec<usize>) -> Vec<usize> {
-    if matches!(p.engine.model(), SurveyorModel::Human { .. }) {
+    if matches!(p.engine.model(), Surveyor::Human { .. }) {
         unpace(p, &walk)
     } else {
         walk
@@ -211,7 +211,7 @@ fn whole_walk(p: &Problem) -> Leg {
         budget: p.budget,
         radius: 0.0,
         any_fit: true,
-        avoid_reversals: matches!(p.engine.model(), SurveyorModel::Human { .. }),
+        avoid_reversals: matches!(p.engine.model(), Surveyor::Human { .. }),
     }
 }
 
@@ -278,7 +278,7 @@ pub struct Stats {
 /// `auto` on a large building (see the module doc). `seed` drives every random choice.
 pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)> {
     let mut stats = Stats::default();
-    let human = matches!(p.engine.model(), SurveyorModel::Human { .. });
+    let human = matches!(p.engine.model(), Surveyor::Human { .. });
     // Progress shows the exact utility of the best walk offered so far (none before the
     // first exact evaluation).
     let report = |f: f64, m: String| {

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::eval::reference_grid;
-use crate::samples::{SurveyorModel, sample_walk};
+use crate::samples::{Surveyor, sample_walk};
 use crate::synth::DEMO_BUILDING_JSON;
 
 fn count(svg: &str, needle: &str) -> usize {
@@ -57,7 +57,7 @@ fn walk_samples_and_heat_map() {
     let ids = ["f0-c00", "f0-c01", "f0-c02", "f0-c03", "f0-c02"];
     let walk = b.resolve_walk(&ids).expect("walk");
     let kernel = Kernel::new(60.0, 8.0, 4.0);
-    let samples = sample_walk(&b, &walk, &SurveyorModel::robot(), &kernel).expect("samples");
+    let samples = sample_walk(&b, &walk, &Surveyor::robot(), &kernel).expect("samples");
     let scene = Scene {
         samples: samples.clone(),
         kernel: Some(kernel),

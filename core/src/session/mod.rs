@@ -62,6 +62,7 @@ pub use types::*;
 
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
+use crate::plan::PlanOrigin;
 use crate::samples::sample_walk;
 use crate::store::PlanRecord;
 use crate::utility::UtilityEngine;
@@ -94,9 +95,9 @@ impl PlanData {
                 start: walk.first().map(|s| s.to_string()).unwrap_or_default(),
                 end: walk.last().map(|s| s.to_string()).unwrap_or_default(),
                 budget_m,
-                surveyor: serde_json::Value::Null,
+                surveyor: None,
                 kernel,
-                algorithm: "given".into(),
+                algorithm: PlanOrigin::Given,
                 seed: None,
                 walk: walk.iter().map(|s| s.to_string()).collect(),
                 length_m,
@@ -207,7 +208,7 @@ impl Session {
         let building = log.building(plan.building_id)?;
         let walk = building.resolve_walk(&plan.record.walk)?;
         let kernel = plan.record.kernel;
-        let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor.model())?;
+        let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor)?;
         let planned_utility = engine.utility(&walk)?;
         let posterior = IncrementalPosterior::new(&building, kernel)?;
         let tracker = Tracker::new(
@@ -389,7 +390,7 @@ impl Session {
         let (origin, left) = self.tracker.replan_origin(&b)?;
         let budget = left.max(0.0);
         let end = self.tracker.end();
-        let model = self.tracker.surveyor().model();
+        let model = *self.tracker.surveyor();
         let prior = self.tracker.observations();
         let seed = self
             .tracker
@@ -444,7 +445,7 @@ impl Session {
                 session: self.id,
                 message: format!(
                     "replanner {} returned a walk that does not go from {:?} to {:?}",
-                    self.replanner.name(),
+                    self.replanner.origin(),
                     b.vertices[origin].id,
                     b.vertices[end].id
                 ),
@@ -455,7 +456,7 @@ impl Session {
                 session: self.id,
                 message: format!(
                     "replanner {} returned a walk of {length:.3} m over the {budget:.3} m left",
-                    self.replanner.name()
+                    self.replanner.origin()
                 ),
             });
         }
@@ -469,9 +470,9 @@ impl Session {
                 start: ids[0].clone(),
                 end: b.vertices[end].id.clone(),
                 budget_m: budget,
-                surveyor: serde_json::to_value(model).unwrap_or(serde_json::Value::Null),
+                surveyor: Some(model),
                 kernel: self.kernel,
-                algorithm: self.replanner.name(),
+                algorithm: self.replanner.origin(),
                 seed: Some(seed),
                 walk: ids.clone(),
                 length_m: length,

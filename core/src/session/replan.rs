@@ -9,7 +9,8 @@ use std::sync::Arc;
 
 use crate::building::Building;
 use crate::gp::Kernel;
-use crate::samples::SurveyorModel;
+use crate::plan::PlanOrigin;
+use crate::surveyor::Surveyor;
 use crate::utility::{Observation, UtilityEngine};
 use crate::{Error, Result};
 
@@ -21,7 +22,7 @@ pub use crate::plan::BUDGET_EPS;
 pub struct ReplanRequest<'a> {
     pub building: &'a Arc<Building>,
     pub kernel: Kernel,
-    pub model: SurveyorModel,
+    pub model: Surveyor,
     /// Samples collected so far with their label noise (pilot data is added by the engine).
     pub prior: &'a [Observation],
     pub start: usize,
@@ -35,8 +36,8 @@ pub trait Replanner: Send + Sync {
     /// A walk (vertex indices) from `start` to `end` of length at most `budget_m`, or
     /// [`Error::Unreachable`] when none exists.
     fn replan(&self, request: &ReplanRequest<'_>) -> Result<Vec<usize>>;
-    /// Name stored with the plan (`algorithm`).
-    fn name(&self) -> String;
+    /// Where its walks come from, stored with the plan (`algorithm`).
+    fn origin(&self) -> PlanOrigin;
 }
 
 /// Greedy on utility gain per metre with a short look-ahead: at each step it tries every
@@ -131,8 +132,8 @@ impl Replanner for GreedyReplanner {
         Ok(out)
     }
 
-    fn name(&self) -> String {
-        "session-greedy".into()
+    fn origin(&self) -> PlanOrigin {
+        PlanOrigin::SessionGreedy
     }
 }
 
@@ -226,7 +227,7 @@ impl Replanner for PlannerReplanner {
         Ok(res.walk_indices)
     }
 
-    fn name(&self) -> String {
-        self.algorithm.name().to_string()
+    fn origin(&self) -> PlanOrigin {
+        PlanOrigin::Planner(self.algorithm)
     }
 }

@@ -6,11 +6,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::samples::SurveyorModel;
+pub use crate::surveyor::{DEFAULT_STEP_LENGTH_M, Surveyor};
 use crate::{Error, Result};
 
-/// Step length of a human surveyor without calibration, metres.
-pub const DEFAULT_STEP_LENGTH_M: f64 = 0.7;
 /// Strongest RSS a scan may report, dBm (a reading above it is a driver bug).
 pub const MAX_RSS_DBM: f64 = 0.0;
 /// Weakest RSS a scan may report, dBm.
@@ -24,101 +22,6 @@ pub const MAX_STEPS_PER_EVENT: u32 = 10_000;
 /// bound keeps every difference and sum of event times (active time, pauses) far inside
 /// `i64` (the fuzzer sent times at `i64::MIN` and `i64::MAX`).
 pub const MAX_EVENT_T_MS: i64 = 100 * 36_525 * 864_000;
-
-/// Who walks, and what the session assumes about them.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Surveyor {
-    /// A person with a phone counting steps (SPEC section 4).
-    Human {
-        /// Step length before any re-estimation (from calibration, else 0.7 m).
-        step_length_m: f64,
-        /// Walking speed, m/s (for time estimates and the sample spacing).
-        speed_mps: f64,
-        /// Time between completed Wi-Fi scans, s.
-        scan_interval_s: f64,
-        /// Relative step-length error `eps` of SPEC section 4.
-        step_error: f64,
-        /// A vertex where the walk turns by more than this is a check-in, degrees.
-        turn_threshold_deg: f64,
-    },
-    /// A robot that reports its own poses (SLAM); its labels carry no extra noise.
-    Robot {
-        /// Metres between scans (speed times scan period).
-        interval_m: f64,
-        /// Speed, m/s (for time estimates).
-        speed_mps: f64,
-    },
-}
-
-impl Surveyor {
-    /// A human surveyor with the defaults of SPEC section 4 and a 0.7 m step.
-    pub fn human() -> Self {
-        Surveyor::Human {
-            step_length_m: DEFAULT_STEP_LENGTH_M,
-            speed_mps: 1.2,
-            scan_interval_s: 4.0,
-            step_error: 0.05,
-            turn_threshold_deg: 30.0,
-        }
-    }
-
-    /// The paper's robot: a scan every 0.5 m at 0.5 m/s.
-    pub fn robot() -> Self {
-        Surveyor::Robot {
-            interval_m: 0.5,
-            speed_mps: 0.5,
-        }
-    }
-
-    /// Whether this is a human surveyor.
-    pub fn is_human(&self) -> bool {
-        matches!(self, Surveyor::Human { .. })
-    }
-
-    /// The surveyor model of the utility (SPEC section 4).
-    pub fn model(&self) -> SurveyorModel {
-        match *self {
-            Surveyor::Human {
-                speed_mps,
-                scan_interval_s,
-                step_error,
-                turn_threshold_deg,
-                ..
-            } => SurveyorModel::Human {
-                speed: speed_mps,
-                scan_interval: scan_interval_s,
-                step_error,
-                turn_threshold_deg,
-            },
-            Surveyor::Robot { interval_m, .. } => SurveyorModel::Robot {
-                interval: interval_m,
-            },
-        }
-    }
-
-    /// Walking speed, m/s.
-    pub fn speed_mps(&self) -> f64 {
-        match *self {
-            Surveyor::Human { speed_mps, .. } | Surveyor::Robot { speed_mps, .. } => speed_mps,
-        }
-    }
-
-    /// Checks every parameter; the message names the bad one.
-    pub fn validate(&self) -> Result<()> {
-        self.model().validate()?;
-        let (name, v) = match *self {
-            Surveyor::Human { step_length_m, .. } => ("step length", step_length_m),
-            Surveyor::Robot { speed_mps, .. } => ("speed", speed_mps),
-        };
-        if !v.is_finite() || v <= 0.0 || v > 10.0 {
-            return Err(Error::InvalidRequest(format!(
-                "surveyor: {name} must be a positive number below 10, got {v}"
-            )));
-        }
-        Ok(())
-    }
-}
 
 /// How the session judges and reacts to the surveyor leaving the plan.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -5,6 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{BuildingRef, building_id, read_tx, write_tx};
 use crate::gp::Kernel;
+use crate::plan::PlanOrigin;
+use crate::surveyor::Surveyor;
 use crate::{Error, Result};
 
 /// A planning request and its result (the fields of SPEC section 7's planning result plus
@@ -17,13 +19,16 @@ pub struct PlanRecord {
     pub end: String,
     /// Budget `B`, metres.
     pub budget_m: f64,
-    /// The surveyor model (robot or human, its speeds, scan interval, step error...) as the
-    /// planner serialises it; the store keeps it verbatim.
-    pub surveyor: serde_json::Value,
+    /// Who the plan was made for (robot or human, speeds, scan interval, step error...);
+    /// `None` for a walk handed to a session rather than planned (SQL `null`), and for a
+    /// stored value of a shape this version cannot read (only early development versions
+    /// wrote one).
+    pub surveyor: Option<Surveyor>,
     /// The kernel the utility was computed with.
     pub kernel: Kernel,
-    /// Planner name (`greedy`, `genetic`, ...).
-    pub algorithm: String,
+    /// Where the walk came from: a planner (`greedy`, `genetic`, ...), the session's
+    /// replanner (`session-greedy`) or a caller (`given`); stored as that name.
+    pub algorithm: PlanOrigin,
     /// Random seed, if the algorithm uses one.
     pub seed: Option<u64>,
     /// The walk, as vertex ids from `start` to `end`.
@@ -145,11 +150,12 @@ pub(super) fn save_in(
             plan.start,
             plan.end,
             plan.budget_m,
-            plan.surveyor.to_string(),
+            serde_json::to_string(&plan.surveyor)
+                .map_err(|e| Error::InvalidRequest(format!("plan surveyor: {e}")))?,
             plan.kernel.sf2,
             plan.kernel.ell,
             plan.kernel.sn2,
-            plan.algorithm,
+            plan.algorithm.name(),
             // A u64 seed is kept bit for bit in SQLite's signed 64-bit integer.
             plan.seed.map(|s| s as i64),
             plan.length_m,
@@ -177,8 +183,12 @@ const PLAN_SQL: &str = "SELECT id, building_id, created_ms, start_vid, end_vid, 
 fn plan_row(conn: &Connection, r: &rusqlite::Row<'_>) -> Result<StoredPlan> {
     let id: i64 = r.get(0)?;
     let surveyor_text: String = r.get(6)?;
-    let surveyor = serde_json::from_str(&surveyor_text)
-        .map_err(|e| Error::InvalidRequest(format!("plan {id}: stored surveyor model: {e}")))?;
+    // Early development versions stored other shapes here (the column only requires JSON);
+    // such a plan reads as one without a recorded surveyor rather than failing every list
+    // of the building's plans. The row itself is never rewritten.
+    let surveyor = serde_json::from_str::<Option<Surveyor>>(&surveyor_text)
+        .ok()
+        .flatten();
     let walk = conn
         .prepare_cached("SELECT vid FROM plan_steps WHERE plan_id = ?1 ORDER BY step")?
         .query_map([id], |r| r.get(0))?
@@ -193,7 +203,8 @@ fn plan_row(conn: &Connection, r: &rusqlite::Row<'_>) -> Result<StoredPlan> {
             budget_m: r.get(5)?,
             surveyor,
             kernel: Kernel::new(r.get(7)?, r.get(8)?, r.get(9)?),
-            algorithm: r.get(10)?,
+            algorithm: PlanOrigin::from_name(&r.get::<_, String>(10)?)
+                .map_err(|e| Error::InvalidRequest(format!("plan {id}: stored algorithm: {e}")))?,
             seed: r.get::<_, Option<i64>>(11)?.map(|s| s as u64),
             length_m: r.get(12)?,
             samples: r.get::<_, i64>(13)?.max(0) as u64,
@@ -253,9 +264,9 @@ impl PlanRecord {
             start: req.start.clone(),
             end: req.end.clone(),
             budget_m: req.budget,
-            surveyor: serde_json::to_value(req.model).unwrap_or(serde_json::Value::Null),
+            surveyor: Some(req.model),
             kernel: res.kernel,
-            algorithm: res.algorithm.name().to_string(),
+            algorithm: res.algorithm.into(),
             seed: Some(res.seed),
             walk: res.walk.clone(),
             length_m: res.length_m,

@@ -39,7 +39,7 @@ use super::reference::Observation;
 use super::simd::{self, Isa, Points};
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
-use crate::samples::{Sample, SurveyorModel, WalkSampler};
+use crate::samples::{Sample, Surveyor, WalkSampler};
 use crate::{Error, Result};
 
 /// Constants of one engine that the numeric kernels need.
@@ -642,7 +642,7 @@ fn dispatch(isa: Isa, f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> Dispatch
 pub struct UtilityEngine {
     building: Arc<Building>,
     kernel: Kernel,
-    model: SurveyorModel,
+    model: Surveyor,
     ctx: Ctx,
     isa: Isa,
     logdet_a: f64,
@@ -658,7 +658,7 @@ pub struct UtilityEngine {
 
 impl UtilityEngine {
     /// Conditions on the building's pilot locations.
-    pub fn new(building: Arc<Building>, kernel: Kernel, model: SurveyorModel) -> Result<Self> {
+    pub fn new(building: Arc<Building>, kernel: Kernel, model: Surveyor) -> Result<Self> {
         Self::with_prior(building, kernel, model, &[])
     }
 
@@ -667,7 +667,7 @@ impl UtilityEngine {
     pub fn with_prior(
         building: Arc<Building>,
         kernel: Kernel,
-        model: SurveyorModel,
+        model: Surveyor,
         prior: &[Observation],
     ) -> Result<Self> {
         let all: Vec<usize> = (0..building.len()).collect();
@@ -681,7 +681,7 @@ impl UtilityEngine {
     pub fn with_vertex_subset(
         building: Arc<Building>,
         kernel: Kernel,
-        model: SurveyorModel,
+        model: Surveyor,
         prior: &[Observation],
         vertices: &[usize],
     ) -> Result<Self> {
@@ -696,7 +696,7 @@ impl UtilityEngine {
     fn build(
         building: Arc<Building>,
         kernel: Kernel,
-        model: SurveyorModel,
+        model: Surveyor,
         prior: &[Observation],
         subset: &[usize],
         isa: Isa,
@@ -831,7 +831,7 @@ impl UtilityEngine {
     }
 
     /// The surveyor model.
-    pub fn model(&self) -> &SurveyorModel {
+    pub fn model(&self) -> &Surveyor {
         &self.model
     }
 
@@ -1096,7 +1096,7 @@ pub(crate) mod tests {
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/area-one.json");
         let b = Arc::new(Building::load(&path).expect("fixture"));
         let kernel = Kernel::new(62.58, 7.93, 4.22);
-        let model = SurveyorModel::robot();
+        let model = Surveyor::robot();
         // Out along unvisited neighbours for eight edges from r0c0, and back the same way.
         let walk: Vec<usize> = {
             let mut out = vec![b.vertex_index("r0c0").expect("r0c0")];
@@ -1222,7 +1222,7 @@ pub(crate) mod tests {
         let kernel = Kernel::new(62.58, 7.93, 4.22);
         let k = 9;
         let b = grid_floors(2, k, 2.0);
-        let model = SurveyorModel::robot();
+        let model = Surveyor::robot();
         // A short walk on floor 0, up the stairs, and a long one on floor 1: along its
         // first row and back three times (merged coincident samples included).
         let mut walk: Vec<usize> = (0..4).map(|i| i * k).collect();
@@ -1267,10 +1267,7 @@ pub(crate) mod tests {
     /// incremental path.
     fn check_s_side(isa: Isa) {
         let kernel = Kernel::new(62.58, 7.93, 4.22);
-        for (k, spacing, model) in [
-            (12, 2.0, SurveyorModel::robot()),
-            (33, 1.5, SurveyorModel::human()),
-        ] {
+        for (k, spacing, model) in [(12, 2.0, Surveyor::robot()), (33, 1.5, Surveyor::human())] {
             let b = grid(k, spacing);
             // Along the first row for six edges, then up one and back.
             let mut walk: Vec<usize> = (0..7).map(|i| i * k).collect();

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use trailprint::Building;
 use trailprint::gp::Kernel;
 use trailprint::plan::{Algorithm, PlanRequest, Problem};
-use trailprint::samples::SurveyorModel;
+use trailprint::surveyor::Surveyor;
 
 /// One of the paper-shaped instances, from the repository's copies in `core/tests/fixtures`
 /// (byte for byte the files of `shared/instances/`), so a checkout anywhere can run them.
@@ -91,7 +91,7 @@ pub fn request(b: &Building, s: usize, t: usize, budget: f64, alg: Algorithm) ->
 }
 
 pub fn problem(b: &Arc<Building>, s: usize, t: usize, budget: f64) -> Problem {
-    Problem::new(b.clone(), kernel(), SurveyorModel::robot(), s, t, budget).expect("problem")
+    Problem::new(b.clone(), kernel(), Surveyor::robot(), s, t, budget).expect("problem")
 }
 
 /// Plain enumeration: the best utility over every walk from `s` to `t` within budget.

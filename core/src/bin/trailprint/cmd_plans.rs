@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use trailprint::samples::SurveyorModel;
 use trailprint::store::{BuildingRef, Store, StoredPlan};
+use trailprint::surveyor::Surveyor;
 use trailprint::{Error, Result};
 
 use crate::opts::json_line;
@@ -69,10 +69,10 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
 }
 
 fn surveyor_kind(p: &StoredPlan) -> &'static str {
-    match p.record.surveyor.get("model").and_then(|m| m.as_str()) {
-        Some("human") => "human",
-        Some("robot") => "robot",
-        _ => "-",
+    match p.record.surveyor {
+        Some(s) if s.is_human() => "human",
+        Some(_) => "robot",
+        None => "-",
     }
 }
 
@@ -128,7 +128,7 @@ fn list(name: Option<&str>, json: bool, db: Option<&Path>) -> Result<()> {
             length_m: p.record.length_m,
             samples: p.record.samples,
             utility_nats: p.record.utility_nats,
-            algorithm: &p.record.algorithm,
+            algorithm: p.record.algorithm.name(),
             surveyor: surveyor_kind(p),
             created_ms: p.record.created_ms,
             created: utc_text(p.record.created_ms),
@@ -224,10 +224,10 @@ pub fn load_plan(store: &Store, id: i64) -> Result<StoredPlan> {
     }
 }
 
-/// The surveyor model a plan was made for (a robot at 0.5 m when the stored value cannot
-/// be read, which only an old or hand-edited database gives).
-pub fn plan_model(p: &StoredPlan) -> SurveyorModel {
-    serde_json::from_value(p.record.surveyor.clone()).unwrap_or_default()
+/// The surveyor a plan was made for (the paper's robot for a walk handed to a session,
+/// which records none).
+pub fn plan_model(p: &StoredPlan) -> Surveyor {
+    p.record.surveyor.unwrap_or_default()
 }
 
 fn show(a: &ShowArgs, db: Option<&Path>) -> Result<()> {

@@ -8,7 +8,7 @@ use clap::Args as ClapArgs;
 use trailprint::building::Building;
 use trailprint::gp::{Kernel, Point};
 use trailprint::render::{RenderOptions, Scene, WalkLayer, render_svg};
-use trailprint::samples::{Sample, SurveyorModel, sample_walk};
+use trailprint::samples::{Sample, Surveyor, sample_walk};
 use trailprint::session::{Session, SessionLog};
 use trailprint::store::{BuildingRef, SessionEvent, Store, StoredPlan};
 use trailprint::{Error, Result};
@@ -98,7 +98,7 @@ fn plan_caption(p: &StoredPlan) -> String {
 struct Source {
     building: Building,
     scene: Scene,
-    model: SurveyorModel,
+    model: Surveyor,
     kernel: Option<Kernel>,
     /// Samples are computed from the walks (not given, as a session's are).
     sample_walks: bool,

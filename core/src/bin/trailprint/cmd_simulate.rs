@@ -17,12 +17,11 @@ use trailprint::plan::{Algorithm, Control, Params, PlanRequest, plan};
 use trailprint::session::sim::{SimOptions, World, simulate};
 use trailprint::session::{
     Ack, Event, GreedyReplanner, PlannerReplanner, Replanner, Session, SessionLog, SessionOptions,
-    Surveyor,
 };
 use trailprint::store::{BuildingRef, ImportOptions, PlanRecord, Store, now_ms};
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelKind, ModelOpts, RouteOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, RouteOpts, json_line};
 use crate::store_cli::{building_ref, is_file_spec, open_store};
 
 #[derive(ClapArgs, Debug)]
@@ -67,7 +66,7 @@ pub struct Args {
     #[arg(long, default_value_t = 3.0)]
     slack: f64,
     /// Human: the step length the session starts from (calibration), metres.
-    #[arg(long, default_value_t = 0.7)]
+    #[arg(long, default_value_t = trailprint::surveyor::DEFAULT_STEP_LENGTH_M)]
     step_length: f64,
     /// Human: the simulated surveyor's real mean step, metres.
     #[arg(long, default_value_t = 0.75)]
@@ -248,20 +247,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     let (store, b, bid, where_) = open(&a, db)?;
     let b = Arc::new(b);
     let (kernel, kernel_source) = a.kernel.resolve(&b)?;
-    let surveyor = match a.model.model {
-        ModelKind::Human => Surveyor::Human {
-            step_length_m: a.step_length,
-            speed_mps: a.model.speed,
-            scan_interval_s: a.model.scan_interval,
-            step_error: a.model.step_error,
-            turn_threshold_deg: a.model.turn_threshold,
-        },
-        ModelKind::Robot => Surveyor::Robot {
-            interval_m: a.model.interval,
-            speed_mps: a.robot_speed,
-        },
-    };
-    surveyor.validate()?;
+    let surveyor = a.model.surveyor(a.step_length, a.robot_speed)?;
     let sim = SimOptions {
         deviate: a.deviate,
         seed: a.seed,
@@ -280,7 +266,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         start: a.route.start.clone(),
         end: a.route.end.clone(),
         budget: a.route.budget,
-        model: surveyor.model(),
+        model: surveyor,
         kernel,
         algorithm: a.algorithm,
         seed: a.seed,

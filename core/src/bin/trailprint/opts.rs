@@ -5,7 +5,10 @@ use std::path::Path;
 use clap::{Args as ClapArgs, ValueEnum};
 use trailprint::building::Building;
 use trailprint::gp::Kernel;
-use trailprint::samples::SurveyorModel;
+use trailprint::surveyor::{
+    DEFAULT_ROBOT_INTERVAL_M, DEFAULT_ROBOT_SPEED_MPS, DEFAULT_SCAN_INTERVAL_S, DEFAULT_STEP_ERROR,
+    DEFAULT_STEP_LENGTH_M, DEFAULT_TURN_THRESHOLD_DEG, DEFAULT_WALKING_SPEED_MPS, Surveyor,
+};
 use trailprint::{Error, Result};
 
 /// Where the building comes from.
@@ -88,31 +91,41 @@ pub struct ModelOpts {
     #[arg(long, value_enum, default_value = "robot")]
     pub model: ModelKind,
     /// Robot: metres between samples (speed x scan period).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = DEFAULT_ROBOT_INTERVAL_M)]
     pub interval: f64,
     /// Human: walking speed, m/s.
-    #[arg(long, default_value_t = 1.2)]
+    #[arg(long, default_value_t = DEFAULT_WALKING_SPEED_MPS)]
     pub speed: f64,
     /// Human: seconds between completed Wi-Fi scans.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = DEFAULT_SCAN_INTERVAL_S)]
     pub scan_interval: f64,
     /// Human: relative step-length error.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = DEFAULT_STEP_ERROR)]
     pub step_error: f64,
     /// Human: a turn sharper than this many degrees is a check-in.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = DEFAULT_TURN_THRESHOLD_DEG)]
     pub turn_threshold: f64,
 }
 
 impl ModelOpts {
-    pub fn model(&self) -> Result<SurveyorModel> {
+    /// The surveyor these options describe, with the default step length and robot speed
+    /// (the planner's utility depends on neither), validated.
+    pub fn model(&self) -> Result<Surveyor> {
+        self.surveyor(DEFAULT_STEP_LENGTH_M, DEFAULT_ROBOT_SPEED_MPS)
+    }
+
+    /// The surveyor these options describe, walking with `step_length_m` (a human) or
+    /// driving at `robot_speed_mps` (a robot), validated.
+    pub fn surveyor(&self, step_length_m: f64, robot_speed_mps: f64) -> Result<Surveyor> {
         let m = match self.model {
-            ModelKind::Robot => SurveyorModel::Robot {
-                interval: self.interval,
+            ModelKind::Robot => Surveyor::Robot {
+                interval_m: self.interval,
+                speed_mps: robot_speed_mps,
             },
-            ModelKind::Human => SurveyorModel::Human {
-                speed: self.speed,
-                scan_interval: self.scan_interval,
+            ModelKind::Human => Surveyor::Human {
+                step_length_m,
+                speed_mps: self.speed,
+                scan_interval_s: self.scan_interval,
                 step_error: self.step_error,
                 turn_threshold_deg: self.turn_threshold,
             },

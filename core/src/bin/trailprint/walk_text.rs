@@ -3,7 +3,7 @@
 //! ([`trailprint::session::tracker::guidance_sentence`]).
 
 use trailprint::building::Building;
-use trailprint::samples::{SurveyorModel, check_in_flags};
+use trailprint::samples::{Surveyor, check_in_flags};
 use trailprint::session::tracker::{classify_turn, guidance_sentence};
 use trailprint::session::types::Turn;
 
@@ -33,14 +33,8 @@ pub fn duration_text(seconds: f64) -> String {
 /// Where the surveyor checks in along `walk` (SPEC section 4): the start, the end, every
 /// turn sharper than the threshold and every change of floor (human); start and end only
 /// for a robot, which needs none.
-pub fn check_ins(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<bool> {
-    let threshold = match *model {
-        SurveyorModel::Human {
-            turn_threshold_deg, ..
-        } => Some(turn_threshold_deg),
-        SurveyorModel::Robot { .. } => None,
-    };
-    check_in_flags(b, walk, threshold)
+pub fn check_ins(b: &Building, walk: &[usize], model: &Surveyor) -> Vec<bool> {
+    check_in_flags(b, walk, model.turn_threshold_deg())
 }
 
 /// Arc length from the start at each vertex of the walk, metres.
@@ -60,10 +54,10 @@ fn arcs(b: &Building, walk: &[usize]) -> Vec<f64> {
 
 /// The walk as a numbered table: step, vertex id, label, floor, metres from the start and
 /// whether the surveyor checks in there.
-pub fn steps_table(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<String> {
+pub fn steps_table(b: &Building, walk: &[usize], model: &Surveyor) -> Vec<String> {
     let arc = arcs(b, walk);
     let checks = check_ins(b, walk, model);
-    let human = matches!(model, SurveyorModel::Human { .. });
+    let human = matches!(model, Surveyor::Human { .. });
     let id_w = column_width(walk.iter().map(|&v| printable(&b.vertices[v].id)), 6);
     let labels = walk.iter().map(|&v| {
         b.vertices[v]
@@ -112,14 +106,14 @@ pub fn steps_table(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<S
 /// check-in, a change of floor, the end) with the distance from the previous line, in the
 /// words of a session's live guidance. Straight-on vertices without a check-in are folded
 /// into the next line's distance.
-pub fn instructions(b: &Building, walk: &[usize], model: &SurveyorModel) -> Vec<String> {
+pub fn instructions(b: &Building, walk: &[usize], model: &Surveyor) -> Vec<String> {
     let mut lines = Vec::new();
     let Some(&first) = walk.first() else {
         return lines;
     };
     let arc = arcs(b, walk);
     let checks = check_ins(b, walk, model);
-    let human = matches!(model, SurveyorModel::Human { .. });
+    let human = matches!(model, Surveyor::Human { .. });
     let v0 = &b.vertices[first];
     let name0 = match &v0.label {
         Some(l) => format!("{} ({})", printable(&v0.id), printable(l)),
@@ -187,7 +181,7 @@ pub fn print_walk_summary(
     length_m: f64,
     budget_m: f64,
     samples: u64,
-    model: &SurveyorModel,
+    model: &Surveyor,
 ) {
     println!("walk          {}", walk.join(","));
     println!("length        {length_m:.1} m of the {budget_m} m budget");
@@ -196,14 +190,18 @@ pub fn print_walk_summary(
 
 /// The surveyor model in words: "robot, a scan every 0.5 m" or "human at 1.2 m/s, a scan
 /// every 4 s (4.8 m), step-length error 5%, check-ins at turns over 30 degrees".
-pub fn model_text(model: &SurveyorModel) -> String {
+pub fn model_text(model: &Surveyor) -> String {
     match *model {
-        SurveyorModel::Robot { interval } => format!("robot, a scan every {interval} m"),
-        SurveyorModel::Human {
-            speed,
-            scan_interval,
+        Surveyor::Robot {
+            interval_m: interval,
+            ..
+        } => format!("robot, a scan every {interval} m"),
+        Surveyor::Human {
+            speed_mps: speed,
+            scan_interval_s: scan_interval,
             step_error,
             turn_threshold_deg,
+            ..
         } => format!(
             "human at {speed} m/s, a scan every {scan_interval} s ({:.1} m), step-length \
              error {:.0}%, check-ins at turns over {turn_threshold_deg} degrees",
@@ -215,14 +213,14 @@ pub fn model_text(model: &SurveyorModel) -> String {
 
 /// A survey robot's speed, m/s, unless `--robot-speed` says otherwise (`simulate` drives
 /// its robot at it, `plan` and `plans show` time a robot's walk with it).
-pub const ROBOT_SPEED_M_S: f64 = 0.5;
+pub const ROBOT_SPEED_M_S: f64 = trailprint::surveyor::DEFAULT_ROBOT_SPEED_MPS;
 
 /// The speed a walk is timed at: a human's own, or for a robot `robot_speed` (the
 /// `--robot-speed` option, default [`ROBOT_SPEED_M_S`]).
-pub fn walking_speed(model: &SurveyorModel, robot_speed: f64) -> f64 {
+pub fn walking_speed(model: &Surveyor, robot_speed: f64) -> f64 {
     match *model {
-        SurveyorModel::Human { speed, .. } => speed,
-        SurveyorModel::Robot { .. } => robot_speed,
+        Surveyor::Human { speed_mps, .. } => speed_mps,
+        Surveyor::Robot { .. } => robot_speed,
     }
 }
 
@@ -232,18 +230,18 @@ pub fn time_text(
     b: &Building,
     walk: &[usize],
     length_m: f64,
-    model: &SurveyorModel,
+    model: &Surveyor,
     speed: f64,
 ) -> String {
     let checks = check_ins(b, walk, model).iter().filter(|&&c| c).count();
     let walking = length_m / speed;
     match model {
-        SurveyorModel::Human { .. } => format!(
+        Surveyor::Human { .. } => format!(
             "about {} at {speed} m/s ({} with a 2 s stop at each of the {checks} check-ins)",
             duration_text(walking),
             duration_text(walking + 2.0 * checks as f64)
         ),
-        SurveyorModel::Robot { .. } => format!(
+        Surveyor::Robot { .. } => format!(
             "about {} at the robot's {speed} m/s (--robot-speed)",
             duration_text(walking)
         ),
@@ -256,7 +254,7 @@ pub fn print_walk(
     b: &Building,
     walk: &[usize],
     length_m: f64,
-    model: &SurveyorModel,
+    model: &Surveyor,
     robot_speed: f64,
     instructions_sheet: bool,
 ) {

@@ -128,13 +128,7 @@ fn arcs(b: &Building, route: &[usize]) -> Vec<f64> {
 
 /// The route's check-in flags (see [`check_in_flags`]).
 fn checkins(b: &Building, route: &[usize], surveyor: &Surveyor) -> Vec<bool> {
-    let threshold = match *surveyor {
-        Surveyor::Human {
-            turn_threshold_deg, ..
-        } => Some(turn_threshold_deg),
-        Surveyor::Robot { .. } => None,
-    };
-    check_in_flags(b, route, threshold)
+    check_in_flags(b, route, surveyor.turn_threshold_deg())
 }
 
 impl Tracker {

@@ -21,7 +21,7 @@ impl Tracker {
         let found = if self.off.is_none() {
             // On-route: the vertex must be where the robot is along the walk, give or take
             // the tolerance and one scan interval (the last pose may lag behind).
-            let reach = self.tol() + self.surveyor.model().spacing();
+            let reach = self.tol() + self.surveyor.spacing();
             (from..self.route.len()).find(|&k| {
                 self.route[k] == v
                     && self.arc[k] >= self.robot_arc - self.tol()
@@ -58,7 +58,7 @@ impl Tracker {
         // the same line). Behind by less than the tolerance: the latest (pose noise).
         let mut forward: Option<(usize, f64, f64)> = None;
         let mut backward: Option<(usize, f64)> = None;
-        let lookahead = (ROBOT_LOOKAHEAD_INTERVALS * self.surveyor.model().spacing()).max(2.0);
+        let lookahead = (ROBOT_LOOKAHEAD_INTERVALS * self.surveyor.spacing()).max(2.0);
         for k in self.anchor..n - 1 {
             if self.arc[k] > self.robot_arc + lookahead + tol {
                 break;
