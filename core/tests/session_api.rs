@@ -10,10 +10,12 @@ use trailprint::plan::{Algorithm, Control, PlanRequest, plan};
 use trailprint::session::replan::distances_from;
 use trailprint::session::sim::{SimOptions, World, simulate};
 use trailprint::session::{
-    Event, GreedyReplanner, LogEvent, MemoryLog, PlanData, PlannerReplanner, Reading, Session,
-    SessionLog, SessionOptions, Surveyor,
+    Event, GreedyReplanner, MemoryLog, PlanData, PlannerReplanner, Reading, Session, SessionLog,
+    SessionOptions, Surveyor,
 };
-use trailprint::store::{BuildingRef, ImportOptions, PlanRecord, Store, collected_csv, now_ms};
+use trailprint::store::{
+    BuildingRef, ImportOptions, PlanRecord, SessionEvent, Store, collected_csv, now_ms,
+};
 use trailprint::synth::DEMO_BUILDING_JSON;
 
 fn demo() -> Building {
@@ -133,7 +135,7 @@ fn replanned_walks_start_at_the_current_vertex_and_fit_the_budget_left() {
                 .iter()
                 .find(|e| Some(e.seq) == seq)
                 .expect("replan event");
-            let LogEvent::Replan { plan_id } = e.event else {
+            let SessionEvent::Replan { plan_id } = e.event else {
                 panic!("event {seq:?} is not a replan");
             };
             let p = store.load_plan(plan_id).expect("replan plan").record;

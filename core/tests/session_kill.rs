@@ -13,9 +13,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use trailprint::session::sim::{SimOptions, World, simulate};
 use trailprint::session::{
-    Event, LogEvent, MemoryLog, Session, SessionLog, SessionSettings, SessionStatus, Surveyor,
+    Event, MemoryLog, Session, SessionLog, SessionSettings, SessionStatus, Surveyor,
 };
-use trailprint::store::Store;
+use trailprint::store::{SessionEvent, Store};
 
 use crate::store_common::{BIN, DEMO_BUILDING, demo_route};
 
@@ -114,9 +114,9 @@ fn reference(
     (digests, log.events(session).expect("events"))
 }
 
-fn mask_plan(e: &LogEvent) -> LogEvent {
+fn mask_plan(e: &SessionEvent) -> SessionEvent {
     match e {
-        LogEvent::Replan { .. } => LogEvent::Replan { plan_id: 0 },
+        SessionEvent::Replan { .. } => SessionEvent::Replan { plan_id: 0 },
         other => other.clone(),
     }
 }

@@ -2,13 +2,12 @@
 //! append-only event log. [`MemoryLog`] keeps it all in memory (tests, `simulate` without
 //! `--db`); the SQLite store implements it for the app.
 
-use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use serde::{Deserialize, Serialize};
 
 use crate::building::Building;
-use crate::store::PlanRecord;
+use crate::store::{PlanRecord, SessionEvent};
 use crate::{Error, Result};
 
 /// A saved plan as a session reads and writes it: the store's plan record (request, walk
@@ -30,50 +29,15 @@ pub struct SessionRow {
     pub settings: serde_json::Value,
 }
 
-/// One event as written to the log. A scan carries the position it was labelled with; the
-/// label is derived data (replay recomputes it), kept so that exports need no replay.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum LogEvent {
-    Step {
-        steps: u32,
-        /// Distance the step counter attributed to these steps (informational).
-        distance_m: f64,
-    },
-    Scan {
-        x: f64,
-        y: f64,
-        floor: i64,
-        sigma_m: f64,
-        since_checkin_m: Option<f64>,
-        rss: BTreeMap<String, f64>,
-    },
-    CheckIn {
-        vertex: String,
-    },
-    Pose {
-        x: f64,
-        y: f64,
-        floor: i64,
-    },
-    /// The session switched to the saved plan `plan_id` (a replan).
-    Replan {
-        plan_id: i64,
-    },
-    Pause,
-    Resume,
-    Finish,
-    Abort {
-        reason: Option<String>,
-    },
-}
-
 /// A logged event with its place and time.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LogEntry {
     pub seq: i64,
     pub t_ms: i64,
-    pub event: LogEvent,
+    /// The event as the store keeps it: a scan carries the position it was labelled with
+    /// (derived data that replay recomputes, kept so that exports need no replay); a robot
+    /// pose from the session has `sigma_m` 0 (SLAM).
+    pub event: SessionEvent,
 }
 
 /// Storage for sessions. `append` must be durable when it returns: the session
@@ -96,7 +60,7 @@ pub trait SessionLog: Send + Sync {
     /// The session row.
     fn session(&self, session_id: i64) -> Result<SessionRow>;
     /// Appends an event; returns its seq (1, 2, ...). Durable on return.
-    fn append(&self, session_id: i64, t_ms: i64, event: &LogEvent) -> Result<i64>;
+    fn append(&self, session_id: i64, t_ms: i64, event: &SessionEvent) -> Result<i64>;
     /// All events of a session, in seq order.
     fn events(&self, session_id: i64) -> Result<Vec<LogEntry>>;
 }
@@ -183,7 +147,7 @@ impl SessionLog for MemoryLog {
         Ok(g.sessions[i].clone())
     }
 
-    fn append(&self, session_id: i64, t_ms: i64, event: &LogEvent) -> Result<i64> {
+    fn append(&self, session_id: i64, t_ms: i64, event: &SessionEvent) -> Result<i64> {
         let mut g = self.lock();
         let i = index(session_id, g.sessions.len(), "session")?;
         let seq = g.events[i].len() as i64 + 1;

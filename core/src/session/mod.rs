@@ -54,7 +54,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-pub use log::{LogEntry, LogEvent, MemoryLog, PlanData, SessionLog, SessionRow};
+pub use log::{LogEntry, MemoryLog, PlanData, SessionLog, SessionRow};
 pub use posterior::IncrementalPosterior;
 pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
 pub use tracker::Tracker;
@@ -64,7 +64,7 @@ use crate::building::Building;
 use crate::gp::{Kernel, Point};
 use crate::plan::PlanOrigin;
 use crate::samples::sample_walk;
-use crate::store::PlanRecord;
+use crate::store::{PlanRecord, SessionEvent};
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
@@ -258,7 +258,7 @@ impl Session {
         };
         let t_ms = entry.t_ms;
         let ev = match &entry.event {
-            LogEvent::Replan { plan_id } => {
+            SessionEvent::Replan { plan_id } => {
                 let plan = self.log.load_plan(*plan_id)?;
                 let walk = b.resolve_walk(&plan.record.walk).map_err(bad)?;
                 // The reserve is what the budget left exceeded the plan's budget by (see
@@ -271,13 +271,14 @@ impl Session {
                 self.reserve_m = reserve;
                 return Ok(());
             }
-            LogEvent::Step { steps, .. } => Event::Step {
+            SessionEvent::Step { steps, .. } => Event::Step {
                 t_ms,
                 steps: *steps,
             },
-            LogEvent::Scan { rss, .. } => Event::Scan {
+            SessionEvent::Scan(fp) => Event::Scan {
                 t_ms,
-                readings: rss
+                readings: fp
+                    .rss
                     .iter()
                     .map(|(k, &v)| Reading {
                         bssid: k.clone(),
@@ -285,20 +286,20 @@ impl Session {
                     })
                     .collect(),
             },
-            LogEvent::CheckIn { vertex } => Event::CheckIn {
+            SessionEvent::CheckIn { vertex } => Event::CheckIn {
                 t_ms,
                 vertex: vertex.clone(),
             },
-            LogEvent::Pose { x, y, floor } => Event::Pose {
+            SessionEvent::Pose { x, y, floor, .. } => Event::Pose {
                 t_ms,
                 x: *x,
                 y: *y,
                 floor: *floor,
             },
-            LogEvent::Pause => Event::Pause { t_ms },
-            LogEvent::Resume => Event::Resume { t_ms },
-            LogEvent::Finish => Event::Finish { t_ms },
-            LogEvent::Abort { reason } => Event::Abort {
+            SessionEvent::Pause => Event::Pause { t_ms },
+            SessionEvent::Resume => Event::Resume { t_ms },
+            SessionEvent::Finish => Event::Finish { t_ms },
+            SessionEvent::Abort { reason } => Event::Abort {
                 t_ms,
                 reason: reason.clone(),
             },
@@ -484,7 +485,9 @@ impl Session {
         };
         let plan_id = self.log.save_plan(&plan)?;
         let t = self.tracker.last_t_ms().unwrap_or_else(now_ms);
-        let seq = self.log.append(self.id, t, &LogEvent::Replan { plan_id })?;
+        let seq = self
+            .log
+            .append(self.id, t, &SessionEvent::Replan { plan_id })?;
         self.tracker.apply_replan(&b, &walk, seq)?;
         self.reserve_m = (left_for_plan - budget).max(0.0);
         Ok(ReplanOutcome {

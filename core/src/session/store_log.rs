@@ -7,64 +7,10 @@
 
 use std::sync::Arc;
 
-use super::log::{LogEntry, LogEvent, PlanData, SessionLog, SessionRow};
+use super::log::{LogEntry, PlanData, SessionLog, SessionRow};
 use crate::building::Building;
-use crate::store::{BuildingRef, CollectedFingerprint, SessionEvent, Store};
+use crate::store::{BuildingRef, SessionEvent, Store};
 use crate::{Error, Result};
-
-fn to_store(event: &LogEvent) -> SessionEvent {
-    match event.clone() {
-        LogEvent::Step { steps, distance_m } => SessionEvent::Step { steps, distance_m },
-        LogEvent::Scan {
-            x,
-            y,
-            floor,
-            sigma_m,
-            since_checkin_m,
-            rss,
-        } => SessionEvent::Scan(CollectedFingerprint {
-            x,
-            y,
-            floor,
-            sigma_m,
-            since_checkin_m,
-            rss,
-        }),
-        LogEvent::CheckIn { vertex } => SessionEvent::CheckIn { vertex },
-        LogEvent::Pose { x, y, floor } => SessionEvent::Pose {
-            x,
-            y,
-            floor,
-            sigma_m: 0.0,
-        },
-        LogEvent::Replan { plan_id } => SessionEvent::Replan { plan_id },
-        LogEvent::Pause => SessionEvent::Pause,
-        LogEvent::Resume => SessionEvent::Resume,
-        LogEvent::Finish => SessionEvent::Finish,
-        LogEvent::Abort { reason } => SessionEvent::Abort { reason },
-    }
-}
-
-fn from_store(event: SessionEvent) -> LogEvent {
-    match event {
-        SessionEvent::Step { steps, distance_m } => LogEvent::Step { steps, distance_m },
-        SessionEvent::Scan(fp) => LogEvent::Scan {
-            x: fp.x,
-            y: fp.y,
-            floor: fp.floor,
-            sigma_m: fp.sigma_m,
-            since_checkin_m: fp.since_checkin_m,
-            rss: fp.rss,
-        },
-        SessionEvent::CheckIn { vertex } => LogEvent::CheckIn { vertex },
-        SessionEvent::Pose { x, y, floor, .. } => LogEvent::Pose { x, y, floor },
-        SessionEvent::Replan { plan_id } => LogEvent::Replan { plan_id },
-        SessionEvent::Pause => LogEvent::Pause,
-        SessionEvent::Resume => LogEvent::Resume,
-        SessionEvent::Finish => LogEvent::Finish,
-        SessionEvent::Abort { reason } => LogEvent::Abort { reason },
-    }
-}
 
 impl SessionLog for Store {
     fn building(&self, building_id: i64) -> Result<Arc<Building>> {
@@ -121,8 +67,8 @@ impl SessionLog for Store {
         })
     }
 
-    fn append(&self, session_id: i64, t_ms: i64, event: &LogEvent) -> Result<i64> {
-        self.append_event(session_id, t_ms, &to_store(event))
+    fn append(&self, session_id: i64, t_ms: i64, event: &SessionEvent) -> Result<i64> {
+        self.append_event(session_id, t_ms, event)
     }
 
     fn events(&self, session_id: i64) -> Result<Vec<LogEntry>> {
@@ -132,7 +78,7 @@ impl SessionLog for Store {
             .map(|e| LogEntry {
                 seq: e.seq,
                 t_ms: e.at_ms,
-                event: from_store(e.event),
+                event: e.event,
             })
             .collect())
     }

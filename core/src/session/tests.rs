@@ -531,8 +531,8 @@ impl SessionLog for DiesBeforeReplan {
     fn session(&self, id: i64) -> Result<SessionRow> {
         self.0.session(id)
     }
-    fn append(&self, id: i64, t_ms: i64, event: &LogEvent) -> Result<i64> {
-        if matches!(event, LogEvent::Replan { .. }) {
+    fn append(&self, id: i64, t_ms: i64, event: &SessionEvent) -> Result<i64> {
+        if matches!(event, SessionEvent::Replan { .. }) {
             return Err(Error::Database {
                 path: "test".into(),
                 message: "killed".into(),

@@ -4,11 +4,11 @@
 use super::Tracker;
 use crate::Result;
 use crate::building::Building;
-use crate::session::log::LogEvent;
 use crate::session::types::{
     Event, MAX_EVENT_T_MS, MAX_READINGS, MAX_RSS_DBM, MAX_STEPS_PER_EVENT, MIN_RSS_DBM,
     SessionStatus,
 };
+use crate::store::{CollectedFingerprint, SessionEvent};
 
 impl Tracker {
     /// Whether `ev` can be accepted now; changes nothing. The error names what is wrong.
@@ -142,15 +142,15 @@ impl Tracker {
     }
 
     /// The event as it goes to the log (a scan with the label it gets now).
-    pub fn log_event(&self, b: &Building, ev: &Event) -> LogEvent {
+    pub fn log_event(&self, b: &Building, ev: &Event) -> SessionEvent {
         match ev {
-            Event::Step { steps, .. } => LogEvent::Step {
+            Event::Step { steps, .. } => SessionEvent::Step {
                 steps: *steps,
                 distance_m: *steps as f64 * self.step_len,
             },
             Event::Scan { readings, .. } => {
                 let (p, u, s, _) = self.label(b);
-                LogEvent::Scan {
+                SessionEvent::Scan(CollectedFingerprint {
                     x: p.x,
                     y: p.y,
                     floor: p.floor,
@@ -160,20 +160,21 @@ impl Tracker {
                         .iter()
                         .map(|r| (r.bssid.clone(), r.rss_dbm))
                         .collect(),
-                }
+                })
             }
-            Event::CheckIn { vertex, .. } => LogEvent::CheckIn {
+            Event::CheckIn { vertex, .. } => SessionEvent::CheckIn {
                 vertex: vertex.clone(),
             },
-            Event::Pose { x, y, floor, .. } => LogEvent::Pose {
+            Event::Pose { x, y, floor, .. } => SessionEvent::Pose {
                 x: *x,
                 y: *y,
                 floor: *floor,
+                sigma_m: 0.0,
             },
-            Event::Pause { .. } => LogEvent::Pause,
-            Event::Resume { .. } => LogEvent::Resume,
-            Event::Finish { .. } => LogEvent::Finish,
-            Event::Abort { reason, .. } => LogEvent::Abort {
+            Event::Pause { .. } => SessionEvent::Pause,
+            Event::Resume { .. } => SessionEvent::Resume,
+            Event::Finish { .. } => SessionEvent::Finish,
+            Event::Abort { reason, .. } => SessionEvent::Abort {
                 reason: reason.clone(),
             },
         }
