@@ -27,6 +27,10 @@ fi
 # keep compiling, and running them is the benchmarks' job, not CI's.
 step "Rust: cargo test --workspace (unit, integration, binaries, examples compile)" \
   cargo test --workspace --no-fail-fast --lib --bins --tests --examples
+# The core's own tests as the phone builds it (no features: no research modules, no clap),
+# so that the phone configuration keeps compiling and passing, not only the default one.
+step "Rust: core unit tests without features (the phone's configuration)" \
+  cargo test -p trailprint-core --no-default-features --no-fail-fast --lib
 # Doc tests run separately (the target selection above skips them).
 step "Rust: doc tests" cargo test --workspace --no-fail-fast --doc
 # Benchmarks must keep compiling: built in the same profile and with the same features as

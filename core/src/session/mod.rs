@@ -46,7 +46,8 @@ mod store_log;
 pub mod tracker;
 pub mod types;
 
-#[cfg(test)]
+// The session tests drive the simulator and the demo building (feature `research`).
+#[cfg(all(test, feature = "research"))]
 mod tests;
 
 use std::sync::Arc;
