@@ -43,8 +43,8 @@ fn check_kernels(v: (Isa, bool)) {
 
 #[test]
 #[cfg_attr(
-    not(trailprint_cpu_avx512),
-    ignore = "not on this CPU (needs AVX-512 F, DQ, VL and FMA)"
+    any(miri, not(trailprint_cpu_avx512)),
+    ignore = "not on this CPU (needs AVX-512 F, DQ, VL and FMA; Miri detects none)"
 )]
 fn avx512_kernels_factor_and_engine_match_the_reference() {
     check_isa(IsaKind::Avx512);
@@ -52,8 +52,8 @@ fn avx512_kernels_factor_and_engine_match_the_reference() {
 
 #[test]
 #[cfg_attr(
-    not(trailprint_cpu_avx2_fma),
-    ignore = "not on this CPU (needs x86-64 AVX2 and FMA)"
+    any(miri, not(trailprint_cpu_avx2_fma)),
+    ignore = "not on this CPU (needs x86-64 AVX2 and FMA; Miri detects none)"
 )]
 fn avx2_fma_kernels_factor_and_engine_match_the_reference() {
     check_isa(IsaKind::Avx2Fma);
