@@ -662,6 +662,7 @@ pub(crate) mod tests {
     /// the tests. Running them on a CPU that disagrees (a target directory copied to
     /// another machine) would make `cargo test` report the wrong ones: this says so.
     #[test]
+    #[cfg_attr(miri, ignore = "Miri detects no instruction set beyond the baseline")]
     fn supported_lists_the_detected_isa_first_and_always_generic() {
         let all = Isa::supported();
         println!("instruction sets tested on this CPU: {all:?}");
