@@ -147,6 +147,7 @@ unsafe fn factor_avx2(
 /// `a` holds at least `layout.len()` elements (checked by [`factor_after`]), `known` is a
 /// multiple of `PANEL` at most `n`, and `L`'s instruction set is available.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // `r` indexes the matrix too, through `at`
 unsafe fn factor_with<L: Lanes>(
     a: &mut [f64],
     layout: Layout,
@@ -154,7 +155,20 @@ unsafe fn factor_with<L: Lanes>(
     logdet_from: usize,
 ) -> Option<f64> {
     let Layout { n, ld } = layout;
+    let len = a.len();
     let ptr = a.as_mut_ptr();
+    // Every access below goes through `ptr`, the kernels' and these loops' alike: indexing
+    // `a` after taking the pointer would invalidate it for the kernels' later reads (a
+    // Stacked Borrows violation Miri found in `tile`'s reads after the diagonal block was
+    // written through `a`). `at` keeps the bounds check the indexing had.
+    let at = |i: usize| -> *mut f64 {
+        assert!(
+            i < len,
+            "index {i} outside the {len} elements of the matrix"
+        );
+        // SAFETY: in bounds, checked above.
+        unsafe { ptr.add(i) }
+    };
     let mut logdet = 0.0;
     // Large matrices (beyond the caches) go panel by panel: the rows of a panel of
     // `PANEL` rows are first updated by every row above the panel, in depth chunks of `KC`
@@ -179,7 +193,8 @@ unsafe fn factor_with<L: Lanes>(
             // columns right of the block are computed, solved against that diagonal.
             let mut inv = [0.0; MR];
             for r in 0..mr {
-                let d = a[(k0 + r) * ld + k0 + r];
+                // SAFETY: `at` checks the bounds; nothing else holds a reference.
+                let d = unsafe { *at((k0 + r) * ld + k0 + r) };
                 if d.is_nan() || d <= 0.0 || !d.is_finite() {
                     return None;
                 }
@@ -199,7 +214,8 @@ unsafe fn factor_with<L: Lanes>(
         // zero so that no stale value lingers in the buffer between factorisations.
         for r in 1..mr {
             for c in 0..r {
-                a[(k0 + r) * ld + k0 + c] = 0.0;
+                // SAFETY: as above.
+                unsafe { *at((k0 + r) * ld + k0 + c) = 0.0 };
             }
         }
         // Factor the diagonal block in place (it is small: plain loops).
@@ -208,12 +224,15 @@ unsafe fn factor_with<L: Lanes>(
             let row = (k0 + r) * ld + k0;
             for q in 0..r {
                 let qrow = (k0 + q) * ld + k0;
-                let c = a[qrow + r];
+                // SAFETY: as above.
+                let c = unsafe { *at(qrow + r) };
                 for cc in r..mr {
-                    a[row + cc] -= c * a[qrow + cc];
+                    // SAFETY: as above.
+                    unsafe { *at(row + cc) -= c * *at(qrow + cc) };
                 }
             }
-            let d2 = a[row + r];
+            // SAFETY: as above.
+            let d2 = unsafe { *at(row + r) };
             if d2.is_nan() || d2 <= 0.0 || !d2.is_finite() {
                 return None;
             }
@@ -221,10 +240,12 @@ unsafe fn factor_with<L: Lanes>(
             if k0 + r >= logdet_from {
                 logdet += d2.ln();
             }
-            a[row + r] = d;
+            // SAFETY: as above.
+            unsafe { *at(row + r) = d };
             inv[r] = 1.0 / d;
             for cc in r + 1..mr {
-                a[row + cc] *= inv[r];
+                // SAFETY: as above.
+                unsafe { *at(row + cc) *= inv[r] };
             }
         }
         // SAFETY: as for the diagonal tile.
