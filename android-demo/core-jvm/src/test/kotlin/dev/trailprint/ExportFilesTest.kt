@@ -1,15 +1,13 @@
 package dev.trailprint
 
-import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.files.ExportFiles
 import dev.trailprint.files.writeFileAtomically
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import java.io.File
-import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -17,19 +15,12 @@ import kotlin.test.assertTrue
 import kotlinx.coroutines.runBlocking
 
 /** Issue 19: exports leave the phone as files, written so that a crash loses nothing. */
-class ExportFilesTest {
-    private val dir: File = Files.createTempDirectory("trailprint-export-test").toFile()
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
-
+class ExportFilesTest : ScratchDir("trailprint-export-test") {
     @Test
     fun aLongSurveysExportsAreFilesWithTheSessionsData() = runBlocking {
         Trailprint.open(File(dir, "e.db").path).use { api ->
             val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
-            val plan = api.store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
+            val plan = api.store.greedyPlan(bid)
             val s = api.startSession(plan.id, defaultHumanProfile())
             var t = 1_700_000_000_000L
             s.checkIn(t, "c00")

@@ -1,7 +1,5 @@
 package dev.trailprint
 
-import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.SessionStatus
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.survey.ActiveSurvey
@@ -16,9 +14,10 @@ import dev.trailprint.survey.SurveyNotificationPolicy
 import dev.trailprint.survey.SurveyPhase
 import dev.trailprint.testing.CountingWakeLock
 import dev.trailprint.testing.FakeSensors
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import java.io.File
-import java.nio.file.Files
 import java.util.concurrent.atomic.AtomicLong
 import kotlin.test.AfterTest
 import kotlin.test.Test
@@ -37,8 +36,7 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 
 /** Issue 19: the survey's life (start, pause, resume, stop, process death) off Android. */
-class LifecycleTest {
-    private val dir: File = Files.createTempDirectory("trailprint-lifecycle-test").toFile()
+class LifecycleTest : ScratchDir("trailprint-lifecycle-test") {
     private val now = AtomicLong(1_700_000_000_000L)
     private val scopes = mutableListOf<CoroutineScope>()
     private val apis = mutableListOf<Trailprint>()
@@ -47,7 +45,6 @@ class LifecycleTest {
     fun cleanUp() {
         scopes.forEach { it.cancel() }
         apis.forEach { it.close() }
-        dir.deleteRecursively()
     }
 
     /** A "process": its own store object on the database file, its own scope and sensors. */
@@ -56,6 +53,13 @@ class LifecycleTest {
         val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default).also { scopes += it }
         val wakeLock = lock
         val lifecycle = SurveyLifecycle(api, ActiveSurveyFile(File(dir, "active.json")), sensors, scope, lock, Dispatchers.IO, clock = { now.get() })
+
+        /** Starts a survey of [planId] and waits until it runs. */
+        suspend fun startRunning(planId: Long, mode: SurveyMode = SurveyMode.HUMAN): ActiveSurvey {
+            val active = lifecycle.start(planId, mode)
+            await("running") { it.phase == SurveyPhase.RUNNING }
+            return active
+        }
 
         /** Waits until the lifecycle's state satisfies [p]. */
         suspend fun await(what: String, p: (LifecycleState) -> Boolean): LifecycleState = try {
@@ -100,16 +104,20 @@ class LifecycleTest {
         }
     }
 
-    private fun planOn(db: File, robot: Boolean = false): Long = dev.trailprint.ffi.TrailprintStore.open(db.path).use { store ->
-        val bid = store.importBuildingJson(TestData.demoBuildingJson, "demo", false).id
-        val profile = if (robot) dev.trailprint.ffi.defaultRobotProfile() else defaultHumanProfile()
-        store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, profile, PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }.id
+    /** A database file [name] in [dir] with the demo building and a plan c00 -> c06: the file and the plan's id. */
+    private fun planOn(name: String, robot: Boolean = false): Pair<File, Long> {
+        val db = File(dir, name)
+        val planId = dev.trailprint.ffi.TrailprintStore.open(db.path).use { store ->
+            val bid = store.importBuildingJson(TestData.demoBuildingJson, "demo", false).id
+            val profile = if (robot) dev.trailprint.ffi.defaultRobotProfile() else defaultHumanProfile()
+            store.greedyPlan(bid, profile = profile).id
+        }
+        return db to planId
     }
 
     @Test
     fun aSurveyKilledMidWalkCarriesOnInANewProcessWithNothingLost() = runBlocking {
-        val db = File(dir, "kill.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("kill.db")
         val first = Process(db)
         val active = first.lifecycle.start(planId, SurveyMode.HUMAN)
         first.await("running") { it.phase == SurveyPhase.RUNNING && it.live.guidance != null }
@@ -161,11 +169,9 @@ class LifecycleTest {
 
     @Test
     fun aPausedSurveyRestartsPausedWithItsSensorsOffAndResumes() = runBlocking {
-        val db = File(dir, "pause.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("pause.db")
         val first = Process(db)
-        first.lifecycle.start(planId, SurveyMode.HUMAN)
-        first.await("running") { it.phase == SurveyPhase.RUNNING }
+        first.startRunning(planId)
         first.step()
         now.addAndGet(1000)
         first.lifecycle.pause()
@@ -193,8 +199,7 @@ class LifecycleTest {
 
     @Test
     fun oneSurveyAtATimeAndStaleOrCorruptRecordsAreReported() = runBlocking {
-        val db = File(dir, "one.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("one.db")
         val proc = Process(db)
         val a = proc.lifecycle.start(planId, SurveyMode.HUMAN)
         val again = assertFailsWith<AppException> { proc.lifecycle.start(planId, SurveyMode.HUMAN) }
@@ -238,13 +243,11 @@ class LifecycleTest {
 
     @Test
     fun aCorruptRecordOffersForgetInsteadOfFailingAtEveryRestart() = runBlocking {
-        val db = File(dir, "corrupt.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("corrupt.db")
         // A survey runs and the process dies; then the record is damaged (a truncated write
         // by a failing storage, a hand edit).
         val first = Process(db)
-        val active = first.lifecycle.start(planId, SurveyMode.HUMAN)
-        first.await("running") { it.phase == SurveyPhase.RUNNING }
+        val active = first.startRunning(planId)
         first.step()
         first.scope.cancel()
         val record = File(dir, "active.json")
@@ -292,8 +295,7 @@ class LifecycleTest {
         assertTrue(starting.indeterminate && starting.ongoing)
         assertEquals("Session 7: starting…", starting.text)
 
-        val db = File(dir, "notify.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("notify.db")
         val proc = Process(db)
         proc.lifecycle.start(planId, SurveyMode.HUMAN)
         val s0 = proc.await("running with progress") { it.phase == SurveyPhase.RUNNING && it.live.progress != null }
@@ -341,11 +343,9 @@ class LifecycleTest {
 
     @Test
     fun aRobotSurveyDrivesOnAfterARestart() = runBlocking {
-        val db = File(dir, "robot.db")
-        val planId = planOn(db, robot = true)
+        val (db, planId) = planOn("robot.db", robot = true)
         val first = Process(db)
-        first.lifecycle.start(planId, SurveyMode.ROBOT)
-        first.await("running") { it.phase == SurveyPhase.RUNNING }
+        first.startRunning(planId, SurveyMode.ROBOT)
         first.awaitLive("three poses") { it.track.size >= 3 }
         first.scope.cancel()
         val acked = first.lifecycle.controller!!.session.progress().walkedM
@@ -364,12 +364,10 @@ class LifecycleTest {
 
     @Test
     fun theCpuIsHeldAwakeOnlyWhileAnEventIsHandled() = runBlocking {
-        val db = File(dir, "awake.db")
-        val planId = planOn(db)
+        val (db, planId) = planOn("awake.db")
         val lock = CountingWakeLock()
         val proc = Process(db, lock = lock)
-        proc.lifecycle.start(planId, SurveyMode.HUMAN)
-        proc.await("running") { it.phase == SurveyPhase.RUNNING }
+        proc.startRunning(planId)
         assertFalse(lock.held, "not held between events")
         // An ack is published from inside its hold; the release follows at once.
         suspend fun released() = withTimeout(5_000) { while (lock.held) kotlinx.coroutines.delay(1) }

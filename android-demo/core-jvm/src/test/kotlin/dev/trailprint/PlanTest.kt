@@ -8,17 +8,16 @@ import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
 import dev.trailprint.ui.BudgetUnit
 import dev.trailprint.ui.PlanModel
 import dev.trailprint.ui.Profile
 import java.io.File
-import java.nio.file.Files
 import java.util.concurrent.CopyOnWriteArrayList
 import java.util.concurrent.CountDownLatch
 import java.util.concurrent.TimeUnit
 import kotlin.concurrent.thread
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -26,20 +25,14 @@ import kotlin.test.assertIs
 import kotlin.test.assertNotNull
 import kotlin.test.assertNull
 import kotlin.test.assertTrue
+import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 
-class PlanTest {
-    private val dir: File = Files.createTempDirectory("trailprint-plan-test").toFile()
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
-
+class PlanTest : ScratchDir("trailprint-plan-test") {
     private fun storeWithDemo(path: String? = null): Pair<TrailprintStore, Long> {
         val store = if (path == null) TrailprintStore.openInMemory() else TrailprintStore.open(path)
         val b = store.importBuildingJson(TestData.demoBuildingJson, "demo-building.json", false)
@@ -48,6 +41,16 @@ class PlanTest {
 
     private fun request(buildingId: Long, budget: Double, algorithm: PlanAlgorithm = PlanAlgorithm.GREEDY, end: String = "c20", timeLimit: Double? = null) =
         PlanRequest(buildingId, "c00", end, budget, defaultRobotProfile(), algorithm, 7uL, timeLimit)
+
+    /** A plan model of the demo building, imported into [api]: loaded, with [start] and [end] tapped. */
+    private suspend fun CoroutineScope.tappedPlanModel(api: Trailprint, start: String, end: String): Pair<Long, PlanModel> {
+        val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
+        val model = PlanModel(api, this, bid)
+        model.load().join()
+        model.tapVertex(start)
+        model.tapVertex(end)
+        return bid to model
+    }
 
     @Test
     fun plansWithinBudgetReportsProgressAndSavesThePlan() {
@@ -162,12 +165,8 @@ class PlanTest {
     @Test
     fun thePlanModelConvertsMinutesAndPlans() = runBlocking {
         Trailprint.inMemory(Dispatchers.IO).use { api ->
-            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
-            val model = PlanModel(api, this, bid)
-            model.load().join()
+            val (_, model) = tappedPlanModel(api, "c00", "c20")
             assertNotNull(model.state.value.map)
-            model.tapVertex("c00")
-            model.tapVertex("c20")
             model.setProfile(Profile.HUMAN)
             model.setBudget(50.0)
             model.setUnit(BudgetUnit.MINUTES)
@@ -191,11 +190,7 @@ class PlanTest {
     @Test
     fun cancellingThePlanModelKeepsTheBestWalkSoFar() = runBlocking {
         Trailprint.inMemory(Dispatchers.IO).use { api ->
-            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
-            val model = PlanModel(api, this, bid)
-            model.load().join()
-            model.tapVertex("c00")
-            model.tapVertex("c00")
+            val (bid, model) = tappedPlanModel(api, "c00", "c00")
             model.setBudget(300.0)
             model.setAlgorithm(PlanAlgorithm.EXACT) // hours without a cancel
             model.plan()

@@ -3,21 +3,21 @@ package dev.trailprint
 import dev.trailprint.demo.DemoScenarios
 import dev.trailprint.demo.SimulatedWifi
 import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.SessionStatus
+import dev.trailprint.ffi.SurveySession
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
 import dev.trailprint.survey.SurveyController
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import dev.trailprint.ui.SurveyUiState
 import java.io.File
-import java.nio.file.Files
 import java.util.concurrent.ConcurrentLinkedQueue
 import kotlin.concurrent.thread
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -27,31 +27,32 @@ import kotlin.test.assertTrue
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.runBlocking
 
-class SessionTest {
-    private val dir: File = Files.createTempDirectory("trailprint-session-test").toFile()
+class SessionTest : ScratchDir("trailprint-session-test") {
     private val t0 = 1_700_000_000_000L
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
 
     /** A store with the demo building and a straight greedy plan c00 -> c06 (9 m). */
     private fun setUp(path: String, budget: Double = 9.0, end: String = "c06", robot: Boolean = false): Triple<TrailprintStore, Long, Long> {
         val store = TrailprintStore.open(path)
         val bid = store.importBuildingJson(TestData.demoBuildingJson, "demo", false).id
         val profile = if (robot) defaultRobotProfile() else defaultHumanProfile()
-        val plan = store.newPlan(PlanRequest(bid, "c00", end, budget, profile, PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
+        val plan = store.greedyPlan(bid, end, budget, profile)
         return Triple(store, bid, plan.id)
+    }
+
+    /**
+     * Runs [test] on a new session of [setUp]'s plan (with [budget] and [end]) in the
+     * database file [name]; closes the session and the store after.
+     */
+    private inline fun withSession(name: String, budget: Double = 9.0, end: String = "c06", test: (TrailprintStore, SurveySession) -> Unit) {
+        val (store, _, planId) = setUp(File(dir, name).path, budget, end)
+        store.use { it.startSession(planId, defaultHumanProfile(), null).use { s -> test(it, s) } }
     }
 
     private fun readings(i: Int) = listOf(WifiReading("aa:aa", -50.0 - i), WifiReading("bb:bb", -70.0 + i))
 
     @Test
     fun aHumanSessionWithStepsScansCheckInsAnOffRouteCheckInAndAReplan() {
-        val (store, _, planId) = setUp(File(dir, "h.db").path, budget = 20.0, end = "c10")
-        store.use {
-            val s = it.startSession(planId, defaultHumanProfile(), null)
+        withSession("h.db", budget = 20.0, end = "c10") { _, s ->
             assertEquals(SessionStatus.ACTIVE, s.status())
             assertEquals("c01", s.guidance().nextVertex)
             var t = t0
@@ -88,7 +89,6 @@ class SessionTest {
             assertTrue("finish" in e.message!!.lowercase(), e.message)
             assertTrue(s.exportCsv().lines().size >= 2)
             assertTrue("aa:aa" in s.exportJson())
-            s.close()
         }
     }
 
@@ -125,9 +125,7 @@ class SessionTest {
 
     @Test
     fun rejectedEventsAreErrorsOfTheRightKind() {
-        val (store, _, planId) = setUp(File(dir, "e.db").path)
-        store.use {
-            val s = it.startSession(planId, defaultHumanProfile(), null)
+        withSession("e.db") { store, s ->
             s.step(t0 + 1000, 1u)
             val back = assertFailsWith<TrailprintException> { s.step(t0, 1u) }
             assertTrue(back is TrailprintException.Session || back is TrailprintException.InvalidRequest, "$back")
@@ -135,19 +133,16 @@ class SessionTest {
             assertTrue("nowhere" in unknown.message!!, unknown.message)
             val badRss = assertFailsWith<TrailprintException> { s.scan(t0 + 3000, listOf(WifiReading("x", 20.0))) }
             assertTrue("20" in badRss.message!!, badRss.message)
-            val missing = assertFailsWith<TrailprintException.NotFound> { it.resumeSession(987654) }
+            val missing = assertFailsWith<TrailprintException.NotFound> { store.resumeSession(987654) }
             assertTrue("987654" in missing.message!!, missing.message)
-            val noPlan = assertFailsWith<TrailprintException.NotFound> { it.startSession(424242, defaultHumanProfile(), null) }
+            val noPlan = assertFailsWith<TrailprintException.NotFound> { store.startSession(424242, defaultHumanProfile(), null) }
             assertTrue("424242" in noPlan.message!!, noPlan.message)
-            s.close()
         }
     }
 
     @Test
     fun aSessionIsSafeToUseFromSeveralThreads() {
-        val (store, _, planId) = setUp(File(dir, "t.db").path)
-        store.use {
-            val s = it.startSession(planId, defaultHumanProfile(), null)
+        withSession("t.db") { _, s ->
             val seqs = ConcurrentLinkedQueue<Long>()
             val errors = ConcurrentLinkedQueue<Throwable>()
             // Every thread uses the same timestamp so order does not matter to the session.
@@ -167,15 +162,12 @@ class SessionTest {
             threads.forEach { it.join() }
             assertTrue(errors.isEmpty(), "$errors")
             assertEquals(40, seqs.toSet().size)
-            s.close()
         }
     }
 
     @Test
     fun theControllerKeepsEventTimesFromGoingBackwards() = runBlocking {
-        val (store, _, planId) = setUp(File(dir, "c.db").path)
-        store.use {
-            val s = it.startSession(planId, defaultHumanProfile(), null)
+        withSession("c.db") { _, s ->
             var now = t0 + 5000
             val c = SurveyController(s, this, Dispatchers.IO, clock = { now })
             c.refresh()
@@ -191,7 +183,6 @@ class SessionTest {
             // After finish a step is rejected and shown as an error; nothing throws.
             assertNull(c.step(now + 1000))
             assertNotNull(c.state.value.error)
-            s.close()
         }
     }
 

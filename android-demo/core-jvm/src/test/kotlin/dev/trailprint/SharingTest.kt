@@ -1,7 +1,6 @@
 package dev.trailprint
 
 import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
@@ -9,41 +8,40 @@ import dev.trailprint.files.Destination
 import dev.trailprint.files.ExportFiles
 import dev.trailprint.files.Incoming
 import dev.trailprint.files.IncomingRouter
+import dev.trailprint.files.takeEachBatch
 import dev.trailprint.json.Json
 import dev.trailprint.json.path
 import dev.trailprint.team.CoordinatorModel
 import dev.trailprint.team.WalkInbox
 import dev.trailprint.team.WalkInboxModel
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import dev.trailprint.ui.PastSurveysModel
 import java.io.ByteArrayInputStream
 import java.io.File
-import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
 import kotlin.test.assertNotNull
 import kotlin.test.assertNull
 import kotlin.test.assertTrue
+import kotlinx.coroutines.channels.Channel
+import kotlinx.coroutines.flow.MutableStateFlow
+import kotlinx.coroutines.launch
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 
 /**
  * Issue 19: files that arrive on a phone (routed by what they are), walk files kept until
  * the surveyor opens them, and past surveys shared again, one or several at a time.
  */
-class SharingTest {
-    private val dir: File = Files.createTempDirectory("trailprint-sharing-test").toFile()
+class SharingTest : ScratchDir("trailprint-sharing-test") {
     private val t0 = 1_700_000_000_000L
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
 
     /** Walks c00 -> c06 on [api]'s building [bid] with [scans] scans; finished unless [finish] is false. */
     private fun survey(api: Trailprint, bid: Long, scans: Int, startMs: Long, finish: Boolean = true): Long {
-        val plan = api.store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
+        val plan = api.store.greedyPlan(bid)
         return api.store.startSession(plan.id, defaultHumanProfile(), null).use { s ->
             var t = startMs
             s.checkIn(t, "c00")
@@ -127,6 +125,20 @@ class SharingTest {
         assertEquals(5, IncomingRouter.readLimited(ByteArrayInputStream(ByteArray(5)), limit = 5)!!.size)
         assertNull(IncomingRouter.readLimited(ByteArrayInputStream(ByteArray(6)), limit = 5))
         assertTrue("256 MiB" in IncomingRouter.tooLarge("huge.json").reason)
+    }
+
+    @Test
+    fun filesWaitingForTheirScreenAreTakenOnceABatch() = runBlocking {
+        val waiting = MutableStateFlow<List<Incoming.Bundle>>(emptyList())
+        val taken = Channel<List<String>>(Channel.UNLIMITED)
+        val screen = launch { waiting.takeEachBatch { files -> taken.send(files.map { it.name }) } }
+        waiting.value = listOf(Incoming.Bundle("a.json", "{}"), Incoming.Bundle("b.json", "{}"))
+        assertEquals(listOf("a.json", "b.json"), withTimeout(5_000) { taken.receive() })
+        assertTrue(waiting.value.isEmpty(), "a batch taken leaves the flow")
+        waiting.value = listOf(Incoming.Bundle("c.json", "{}"))
+        assertEquals(listOf("c.json"), withTimeout(5_000) { taken.receive() })
+        screen.cancel()
+        assertTrue(taken.tryReceive().isFailure, "each batch is taken once")
     }
 
     @Test

@@ -2,11 +2,10 @@ package dev.trailprint
 
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
 import dev.trailprint.ui.BuildingsModel
 import java.io.File
-import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -18,14 +17,7 @@ import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 import kotlinx.coroutines.flow.first
 
-class StoreTest {
-    private val dir: File = Files.createTempDirectory("trailprint-store-test").toFile()
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
-
+class StoreTest : ScratchDir("trailprint-store-test") {
     @Test
     fun importsListsAndDrawsABuildingThatSurvivesReopening() {
         val db = File(dir, "t.db").path

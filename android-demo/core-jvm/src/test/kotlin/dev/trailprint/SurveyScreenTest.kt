@@ -1,23 +1,20 @@
 package dev.trailprint
 
-import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.Position
 import dev.trailprint.ffi.SessionStatus
-import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.survey.SurveyLive
 import dev.trailprint.files.ExportFiles
 import dev.trailprint.survey.ActiveSurveyFile
 import dev.trailprint.survey.SurveyLifecycle
 import dev.trailprint.survey.SurveyMode
 import dev.trailprint.testing.FakeSensors
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import dev.trailprint.ui.FinishModel
 import dev.trailprint.ui.SurveyModel
 import dev.trailprint.ui.SurveyUiState
 import java.io.File
-import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertNotNull
@@ -31,14 +28,7 @@ import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.runBlocking
 import kotlinx.coroutines.withTimeout
 
-class SurveyScreenTest {
-    private val dir: File = Files.createTempDirectory("trailprint-ui-test").toFile()
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
-
+class SurveyScreenTest : ScratchDir("trailprint-ui-test") {
     @Test
     fun theScreenStateDrawsTheWalkAheadFromTheEstimate() = runBlocking {
         Trailprint.inMemory().use { api ->
@@ -59,7 +49,7 @@ class SurveyScreenTest {
     fun theSurveyModelDrivesTheLifecycleAndTheFinishModelWritesFilesToShare() = runBlocking {
         Trailprint.open(File(dir, "ui.db").path, Dispatchers.IO).use { api ->
             val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
-            val plan = api.store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
+            val plan = api.store.greedyPlan(bid)
             var now = 1_700_000_000_000L
             val scope = CoroutineScope(SupervisorJob() + Dispatchers.Default)
             val sensors = FakeSensors()

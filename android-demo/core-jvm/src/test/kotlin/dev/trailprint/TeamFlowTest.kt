@@ -1,7 +1,6 @@
 package dev.trailprint
 
 import dev.trailprint.ffi.PlanAlgorithm
-import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.SessionStatus
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
@@ -9,11 +8,12 @@ import dev.trailprint.files.ExportFiles
 import dev.trailprint.team.CoordinatorModel
 import dev.trailprint.team.WalkFiles
 import dev.trailprint.team.WalkInboxModel
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.greedyPlan
 import dev.trailprint.ui.FinishModel
 import java.io.File
 import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -23,20 +23,14 @@ import kotlin.test.assertTrue
 import kotlinx.coroutines.runBlocking
 
 /** Issue 19: surveyors share bundles, a coordinator merges them and hands out team walks. */
-class TeamFlowTest {
-    private val dir: File = Files.createTempDirectory("trailprint-teamflow-test").toFile()
+class TeamFlowTest : ScratchDir("trailprint-teamflow-test") {
     private val t0 = 1_700_000_000_000L
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
 
     /** A surveyor's phone that walked c00 -> c06 with [scans] scans and finished. */
     private suspend fun surveyorPhone(name: String, scans: Int, rssBase: Double): Pair<Trailprint, Long> {
         val api = Trailprint.open(File(dir, "$name.db").path)
         val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
-        val plan = api.store.newPlan(PlanRequest(bid, "c00", "c06", 9.0, defaultHumanProfile(), PlanAlgorithm.GREEDY, 1uL, null)).use { it.run(null) }
+        val plan = api.store.greedyPlan(bid)
         val s = api.startSession(plan.id, defaultHumanProfile())
         var t = t0
         s.checkIn(t, "c00")

@@ -9,10 +9,9 @@ import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
+import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
 import java.io.File
-import java.nio.file.Files
-import kotlin.test.AfterTest
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
@@ -20,14 +19,7 @@ import kotlin.test.assertTrue
 import kotlinx.coroutines.runBlocking
 
 /** Issue 9 from the app's side: plan as one of a team, export and merge bundles. */
-class TeamTest {
-    private val dir: File = Files.createTempDirectory("trailprint-team-test").toFile()
-
-    @AfterTest
-    fun cleanUp() {
-        dir.deleteRecursively()
-    }
-
+class TeamTest : ScratchDir("trailprint-team-test") {
     private fun team(store: TrailprintStore, bid: Long, independent: Boolean) = store.planTeam(
         TeamPlanRequest(
             bid,

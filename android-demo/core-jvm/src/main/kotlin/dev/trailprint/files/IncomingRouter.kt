@@ -5,6 +5,7 @@ import java.io.InputStream
 import java.nio.ByteBuffer
 import java.nio.charset.CharacterCodingException
 import java.nio.charset.CodingErrorAction
+import kotlinx.coroutines.flow.MutableStateFlow
 
 /** One file handed to the app (share sheet, "open with", a file picker), once classified. */
 sealed interface Incoming {
@@ -23,6 +24,18 @@ sealed interface Incoming {
     /** Not something the app opens; [reason] says what it is and what would be. */
     data class Refused(override val name: String, val reason: String) : Incoming {
         fun line(): String = "$name: $reason"
+    }
+}
+
+/**
+ * Files handed to the app wait on such a flow for the screen that imports them: hands each
+ * batch that arrives to [take] and empties the flow, so that a batch is taken once. Runs
+ * until cancelled (with the screen's scope).
+ */
+suspend fun <T : Incoming> MutableStateFlow<List<T>>.takeEachBatch(take: suspend (List<T>) -> Unit): Nothing = collect { files ->
+    if (files.isNotEmpty()) {
+        value = emptyList()
+        take(files)
     }
 }
 

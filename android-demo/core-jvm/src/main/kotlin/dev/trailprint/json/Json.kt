@@ -30,31 +30,27 @@ object Json {
             is Double -> writeDouble(out, v)
             is Float -> writeDouble(out, v.toDouble())
             is String -> writeString(out, v)
-            is Map<*, *> -> {
-                out.append('{')
-                var first = true
-                for ((k, x) in v) {
-                    if (!first) out.append(',')
-                    first = false
-                    writeString(out, k as? String ?: throw JsonException("object key $k is not a string"))
-                    out.append(':')
-                    write(out, x)
-                }
-                out.append('}')
+            is Map<*, *> -> writeItems(out, '{', '}', v.entries) { (k, x) ->
+                writeString(out, k as? String ?: throw JsonException("object key $k is not a string"))
+                out.append(':')
+                write(out, x)
             }
-            is Iterable<*> -> {
-                out.append('[')
-                var first = true
-                for (x in v) {
-                    if (!first) out.append(',')
-                    first = false
-                    write(out, x)
-                }
-                out.append(']')
-            }
+            is Iterable<*> -> writeItems(out, '[', ']', v) { write(out, it) }
             is DoubleArray -> write(out, v.toList())
             else -> throw JsonException("cannot encode ${v::class.simpleName} as JSON")
         }
+    }
+
+    /** [items] between [open] and [close], separated by commas, each written by [item]. */
+    private inline fun <T> writeItems(out: StringBuilder, open: Char, close: Char, items: Iterable<T>, item: (T) -> Unit) {
+        out.append(open)
+        var first = true
+        for (x in items) {
+            if (!first) out.append(',')
+            first = false
+            item(x)
+        }
+        out.append(close)
     }
 
     private fun writeDouble(out: StringBuilder, d: Double) {
@@ -109,11 +105,7 @@ object Json {
 
         fun obj(): Map<String, Any?> {
             val m = LinkedHashMap<String, Any?>()
-            i++
-            ws()
-            if (i < s.length && s[i] == '}') { i++; return m }
-            while (true) {
-                ws()
+            items('}', "object") {
                 if (i >= s.length || s[i] != '"') fail("expected a string key")
                 val k = str()
                 ws()
@@ -121,30 +113,33 @@ object Json {
                 i++
                 ws()
                 m[k] = value()
-                ws()
-                if (i >= s.length) fail("unterminated object")
-                when (s[i]) {
-                    ',' -> i++
-                    '}' -> { i++; return m }
-                    else -> fail("expected , or }")
-                }
             }
+            return m
         }
 
         fun arr(): List<Any?> {
             val l = ArrayList<Any?>()
+            items(']', "array") { l.add(value()) }
+            return l
+        }
+
+        /**
+         * The comma-separated items of an [what] (object or array) whose opening bracket is
+         * at [i], each read by [item], up to and past the [close] bracket.
+         */
+        inline fun items(close: Char, what: String, item: () -> Unit) {
             i++
             ws()
-            if (i < s.length && s[i] == ']') { i++; return l }
+            if (i < s.length && s[i] == close) { i++; return }
             while (true) {
                 ws()
-                l.add(value())
+                item()
                 ws()
-                if (i >= s.length) fail("unterminated array")
+                if (i >= s.length) fail("unterminated $what")
                 when (s[i]) {
                     ',' -> i++
-                    ']' -> { i++; return l }
-                    else -> fail("expected , or ]")
+                    close -> { i++; return }
+                    else -> fail("expected , or $close")
                 }
             }
         }

@@ -17,6 +17,7 @@ import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.json.Json
 import dev.trailprint.json.JsonException
 import dev.trailprint.json.path
+import dev.trailprint.runBusy
 import java.time.Instant
 import java.time.ZoneId
 import java.time.format.DateTimeFormatter
@@ -222,16 +223,5 @@ class CoordinatorModel(
     /** Shows an error from outside the store (a shared file that could not be read). */
     fun reportError(message: String) = _state.update { it.copy(error = message) }
 
-    private fun busy(block: suspend () -> Unit) = scope.launch {
-        _state.update { it.copy(busy = true, error = null) }
-        try {
-            block()
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } catch (e: AppException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            _state.update { it.copy(busy = false) }
-        }
-    }
+    private fun busy(block: suspend () -> Unit) = scope.launch { _state.runBusy({ copy(busy = it) }, { copy(error = it) }, block) }
 }

@@ -2,7 +2,7 @@ package dev.trailprint.team
 
 import dev.trailprint.AppException
 import dev.trailprint.Trailprint
-import dev.trailprint.ffi.TrailprintException
+import dev.trailprint.runAction
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
@@ -62,16 +62,13 @@ class WalkInboxModel(
 
     /** Opens the walk file [text] at once, without keeping it. */
     fun open(origin: String, text: String) = scope.launch {
-        _state.update { it.copy(busy = true, received = null, error = null) }
-        try {
+        runAction(
+            start = { _state.update { it.copy(busy = true, received = null, error = null) } },
+            fail = ::showError,
+            finish = { _state.update { it.copy(busy = false) } },
+        ) {
             val r = WalkFiles.open(api, text, origin)
             _state.update { it.copy(received = r) }
-        } catch (e: AppException) {
-            _state.update { it.copy(error = e.message) }
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            _state.update { it.copy(busy = false) }
         }
     }
 
@@ -128,16 +125,16 @@ class WalkInboxModel(
 
     /** Runs [block], then reloads the list; errors become [WalkInboxState.error]. */
     private fun act(block: suspend () -> Unit) = scope.launch {
-        _state.update { it.copy(busy = true) }
-        try {
-            block()
-        } catch (e: AppException) {
-            _state.update { it.copy(error = e.message) }
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            val list = inbox?.let { box -> withContext(io) { runCatching { box.entries() }.getOrElse { emptyList() } } } ?: emptyList()
-            _state.update { it.copy(busy = false, inbox = list) }
-        }
+        runAction(
+            start = { _state.update { it.copy(busy = true) } },
+            fail = ::showError,
+            finish = {
+                val list = inbox?.let { box -> withContext(io) { runCatching { box.entries() }.getOrElse { emptyList() } } } ?: emptyList()
+                _state.update { it.copy(busy = false, inbox = list) }
+            },
+            block = block,
+        )
     }
+
+    private fun showError(message: String?) = _state.update { it.copy(error = message) }
 }

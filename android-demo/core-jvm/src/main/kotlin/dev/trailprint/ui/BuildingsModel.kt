@@ -2,7 +2,7 @@ package dev.trailprint.ui
 
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.BuildingSummary
-import dev.trailprint.ffi.TrailprintException
+import dev.trailprint.runBusy
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.flow.MutableStateFlow
 import kotlinx.coroutines.flow.StateFlow
@@ -44,14 +44,5 @@ class BuildingsModel(private val api: Trailprint, private val scope: CoroutineSc
     /** Shows an error from outside the store (a file that could not be read). */
     fun reportError(message: String) = _state.update { it.copy(error = message) }
 
-    private fun launchBusy(block: suspend () -> Unit) = scope.launch {
-        _state.update { it.copy(busy = true, error = null) }
-        try {
-            block()
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            _state.update { it.copy(busy = false) }
-        }
-    }
+    private fun launchBusy(block: suspend () -> Unit) = scope.launch { _state.runBusy({ copy(busy = it) }, { copy(error = it) }, block) }
 }

@@ -6,6 +6,7 @@ import dev.trailprint.files.ExportFiles
 import dev.trailprint.files.ShareableFile
 import dev.trailprint.ffi.SessionSummary
 import dev.trailprint.ffi.TrailprintException
+import dev.trailprint.runBusy
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.CoroutineScope
 import kotlinx.coroutines.Dispatchers
@@ -84,16 +85,9 @@ class FinishModel(
 
     private fun export(make: suspend (Long) -> ShareableFile) = scope.launch {
         val sid = sessionId ?: return@launch
-        _state.update { it.copy(busy = true, error = null) }
-        try {
+        _state.runBusy({ copy(busy = it) }, { copy(error = it) }) {
             val f = make(sid)
             _state.update { it.copy(share = f) }
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } catch (e: AppException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            _state.update { it.copy(busy = false) }
         }
     }
 }

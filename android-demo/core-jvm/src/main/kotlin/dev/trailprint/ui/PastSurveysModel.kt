@@ -3,9 +3,9 @@ package dev.trailprint.ui
 import dev.trailprint.AppException
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.SessionStatus
-import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.files.ExportFiles
 import dev.trailprint.files.ShareableFile
+import dev.trailprint.runBusy
 import java.time.Instant
 import java.time.ZoneId
 import java.time.format.DateTimeFormatter
@@ -93,16 +93,5 @@ class PastSurveysModel(
 
     fun dismissError() = _state.update { it.copy(error = null) }
 
-    private fun busy(block: suspend () -> Unit) = scope.launch {
-        _state.update { it.copy(busy = true, error = null) }
-        try {
-            block()
-        } catch (e: TrailprintException) {
-            _state.update { it.copy(error = e.message) }
-        } catch (e: AppException) {
-            _state.update { it.copy(error = e.message) }
-        } finally {
-            _state.update { it.copy(busy = false) }
-        }
-    }
+    private fun busy(block: suspend () -> Unit) = scope.launch { _state.runBusy({ copy(busy = it) }, { copy(error = it) }, block) }
 }

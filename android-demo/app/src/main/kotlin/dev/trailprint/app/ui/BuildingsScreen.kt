@@ -33,6 +33,7 @@ import androidx.compose.ui.platform.LocalContext
 import dev.trailprint.app.TrailprintApp
 import dev.trailprint.app.readIncoming
 import dev.trailprint.files.Incoming
+import dev.trailprint.files.takeEachBatch
 import dev.trailprint.ui.BuildingsModel
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.launch
@@ -47,12 +48,7 @@ class BuildingsViewModel(app: Application) : AndroidViewModel(app) {
         model.refresh()
         // Building files shared to the app from another one.
         viewModelScope.launch {
-            trailprint.incomingBuildings.collect { files ->
-                if (files.isNotEmpty()) {
-                    trailprint.incomingBuildings.value = emptyList()
-                    files.forEach { model.import(it.text, it.name).join() }
-                }
-            }
+            trailprint.incomingBuildings.takeEachBatch { files -> files.forEach { model.import(it.text, it.name).join() } }
         }
     }
 

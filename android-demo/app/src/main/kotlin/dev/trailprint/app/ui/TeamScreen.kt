@@ -38,6 +38,7 @@ import androidx.lifecycle.viewmodel.compose.viewModel
 import dev.trailprint.app.TrailprintApp
 import dev.trailprint.app.readDocument
 import dev.trailprint.app.shareFile
+import dev.trailprint.files.takeEachBatch
 import dev.trailprint.team.CoordinatorModel
 import android.net.Uri
 import kotlinx.coroutines.Dispatchers
@@ -53,12 +54,7 @@ class TeamViewModel(app: Application) : AndroidViewModel(app) {
         model.refresh()
         // Bundles shared to the app from another one (the share sheet) wait in TrailprintApp.
         viewModelScope.launch {
-            trailprint.incomingBundles.collect { files ->
-                if (files.isNotEmpty()) {
-                    trailprint.incomingBundles.value = emptyList()
-                    model.importBundles(files.map { it.name to it.text })
-                }
-            }
+            trailprint.incomingBundles.takeEachBatch { files -> model.importBundles(files.map { it.name to it.text }) }
         }
     }
 
