@@ -10,7 +10,7 @@ use crate::store_common;
 use std::path::Path;
 
 use store_common::{
-    SIMULATE_DEMO_ROBOT, demo_name, dump_file, read_stderr, run, run_ok, shared_instance,
+    SIMULATE_DEMO_ROBOT, demo_name, dump_file, read_stderr, run, run_ok, shared_instance, temp_db,
 };
 
 /// A simulated survey of the demo building, stored in `db`: one plan, one session and its
@@ -21,8 +21,7 @@ fn simulate(db: &Path) {
 
 #[test]
 fn delete_needs_force_when_survey_data_would_go_and_says_how_much() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     simulate(&db);
     let name = demo_name();
     let info = trailprint::Store::open(&db)
@@ -73,8 +72,7 @@ fn delete_needs_force_when_survey_data_would_go_and_says_how_much() {
 
 #[test]
 fn building_names_are_printed_escaped() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     // Clear the screen, home the cursor, ring the bell, then a right-to-left override.
     let evil = "\u{1b}[2J\u{1b}[HEvil\u{7} \u{202e}gnp.exe";
     let mut v: serde_json::Value = serde_json::from_str(

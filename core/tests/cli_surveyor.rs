@@ -10,7 +10,7 @@ use crate::store_common;
 
 use std::path::Path;
 
-use store_common::{demo_name, run, run_ok, shared_instance, shell_words};
+use store_common::{demo_db, demo_name, run, run_ok, shared_instance, shell_words, temp_db};
 
 const DEMO: &str = store_common::DEMO_BUILDING;
 
@@ -25,6 +25,21 @@ fn run_err(db: &Path, args: &[&str]) -> String {
     assert_eq!(out.status.code(), Some(1), "{args:?}: {e}");
     assert!(e.starts_with("error: "), "{e}");
     e
+}
+
+/// `plan --building B --start S --end E --budget M`, expected to fail: its error line.
+fn plan_err(db: &Path, building: &str, start: &str, end: &str, budget: &str) -> String {
+    let args = [
+        "--building",
+        building,
+        "--start",
+        start,
+        "--end",
+        end,
+        "--budget",
+        budget,
+    ];
+    run_err(db, &[&["plan"][..], &args].concat())
 }
 
 /// The demo's corridor walk, from `f0-c00` to `f0-c15` within `budget` metres.
@@ -74,8 +89,7 @@ fn with_plan(db: &Path) -> (String, i64) {
 
 #[test]
 fn plans_are_listed_and_shown_with_their_walk() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     let empty = run_ok(&db, &["plans"]);
     assert!(empty.starts_with("no plans"), "{empty}");
     let (name, id) = with_plan(&db);
@@ -168,9 +182,7 @@ fn plans_are_listed_and_shown_with_their_walk() {
 
 #[test]
 fn vertices_lists_ids_labels_floors_and_positions() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    run_ok(&db, &["import", DEMO]);
+    let (_dir, db) = demo_db();
     let b = trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
         .expect("demo");
     let text = run_ok(&db, &["vertices", &b.name]);
@@ -222,9 +234,7 @@ fn vertices_lists_ids_labels_floors_and_positions() {
 
 #[test]
 fn fit_of_a_building_in_the_database_is_stored() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    run_ok(&db, &["import", DEMO]);
+    let (_dir, db) = demo_db();
     let name = demo_name();
     let fits = |db: &Path| -> i64 {
         let v: serde_json::Value =
@@ -252,8 +262,7 @@ fn fit_of_a_building_in_the_database_is_stored() {
 
 #[test]
 fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     let out = run_ok(&db, &["demo", "--budget", "40"]);
     assert!(
         !out.contains("Robot {") && !out.contains("Human {") && !out.contains("interval:"),
@@ -293,8 +302,7 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
 
 #[test]
 fn plan_is_printed_for_a_person() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     let args = [
         &["plan", "--building", DEMO][..],
         &corridor("70"),
@@ -373,23 +381,9 @@ fn plan_is_printed_for_a_person() {
 
 #[test]
 fn errors_say_what_would_do() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     // A near-miss vertex id gets the nearest ids.
-    let e = run_err(
-        &db,
-        &[
-            "plan",
-            "--building",
-            DEMO,
-            "--start",
-            "f0-c0",
-            "--end",
-            "f0-c15",
-            "--budget",
-            "30",
-        ],
-    );
+    let e = plan_err(&db, DEMO, "f0-c0", "f0-c15", "30");
     assert!(
         e.contains("start: unknown vertex \"f0-c0\"") && e.contains("did you mean \"f0-c00\""),
         "{e}"
@@ -407,20 +401,7 @@ fn errors_say_what_would_do() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, text).expect("write");
-        let building = run_err(
-            &db,
-            &[
-                "plan",
-                "--building",
-                path.to_str().expect("utf-8"),
-                "--start",
-                "a",
-                "--end",
-                "a",
-                "--budget",
-                "5",
-            ],
-        );
+        let building = plan_err(&db, path.to_str().expect("utf-8"), "a", "a", "5");
         let e = &building;
         assert!(
             e.contains(&format!("{name}: not a JSON survey-building/1 file")) && e.contains(begins),
@@ -490,8 +471,7 @@ fn errors_say_what_would_do() {
 
 #[test]
 fn render_draws_plans_sessions_and_teams() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     let (name, id) = with_plan(&db);
     let svg_of = |args: &[&str]| -> String {
         let path = dir.path().join("out.svg");
@@ -580,9 +560,7 @@ fn render_draws_plans_sessions_and_teams() {
 
 #[test]
 fn team_plan_keeps_its_walks_as_plans() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    run_ok(&db, &["import", DEMO]);
+    let (_dir, db) = demo_db();
     let name = demo_name();
     let out = run_ok(
         &db,
@@ -619,8 +597,7 @@ fn team_plan_keeps_its_walks_as_plans() {
 /// (`b5` for `b05`), a number past the end, a label instead of an id.
 #[test]
 fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     let area_two = shared_instance("area-two.json");
     let area_two = area_two.to_str().expect("utf-8");
     for (building, typed, end, expect) in [
@@ -639,40 +616,14 @@ fn unknown_vertex_suggests_the_ids_of_the_bundled_buildings() {
         (area_two, "b5", "t29", "; did you mean \"b05\"?"),
         (area_two, "t3", "t29", "; did you mean \"t03\"?"),
     ] {
-        let e = run_err(
-            &db,
-            &[
-                "plan",
-                "--building",
-                building,
-                "--start",
-                typed,
-                "--end",
-                end,
-                "--budget",
-                "30",
-            ],
-        );
+        let e = plan_err(&db, building, typed, end, "30");
         assert!(
             e.contains(&format!("start: unknown vertex {typed:?}")) && e.contains(expect),
             "{typed}: {e}"
         );
     }
     // The end and a walk are answered the same way.
-    let e = run_err(
-        &db,
-        &[
-            "plan",
-            "--building",
-            DEMO,
-            "--start",
-            "f0-c00",
-            "--end",
-            "c15",
-            "--budget",
-            "30",
-        ],
-    );
+    let e = plan_err(&db, DEMO, "f0-c00", "c15", "30");
     assert!(
         e.contains("end: unknown vertex \"c15\"") && e.contains("did you mean \"f0-c15\"?"),
         "{e}"
@@ -733,8 +684,7 @@ fn mark_classes(
 /// not, two surveyors who share an edge and two who do not, and a session as walked.
 #[test]
 fn every_mark_on_a_map_has_its_legend_entry() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     let office = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/fixtures/floorplans/office-l.geojson"
@@ -861,9 +811,7 @@ fn every_mark_on_a_map_has_its_legend_entry() {
 /// collected CSV holds numbers to the millimetre and 0.01 dB, not `4.199999999999999`.
 #[test]
 fn robot_time_fit_without_pilot_and_collected_csv_digits() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    run_ok(&db, &["import", DEMO]);
+    let (dir, db) = demo_db();
     let demo = demo_name();
     let out = run_ok(
         &db,

@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::process::Output;
 
-use crate::store_common::trailprint;
+use crate::store_common::{trailprint, words};
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
@@ -18,38 +18,15 @@ fn generate_evaluate_render() {
     let dir = tempfile::tempdir().expect("tempdir");
     let file = dir.path().join("b.json");
     let file_s = file.to_str().expect("utf-8 path");
-    let o = trailprint(&[
-        "generate",
-        "--out",
-        file_s,
-        "--floors",
-        "2",
-        "--rooms",
-        "2",
-        "--corridor-length",
-        "16",
-        "--aps",
-        "6",
-        "--seed",
-        "4",
-    ]);
+    let sizes = words("--floors 2 --rooms 2 --corridor-length 16 --aps 6 --seed 4");
+    let o = trailprint(&[&["generate", "--out", file_s][..], &sizes].concat());
     assert!(o.status.success(), "{}", stderr(&o));
     let b = trailprint::Building::load(&file).expect("generated file is valid");
     assert_eq!(b.floors.len(), 2);
 
     let walk = "f0-c02,f0-c01,f0-c00,f1-c00,f1-c01";
-    let evaluate = [
-        "evaluate",
-        "--building",
-        file_s,
-        "--walk",
-        walk,
-        "--kernel",
-        "60,8,4",
-        "--seed",
-        "2",
-        "--json",
-    ];
+    let on_walk = ["--building", file_s, "--walk", walk, "--kernel", "60,8,4"];
+    let evaluate = [&["evaluate"][..], &on_walk, &words("--seed 2 --json")].concat();
     let o = trailprint(&evaluate);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("one JSON object");
@@ -63,17 +40,14 @@ fn generate_evaluate_render() {
     assert_eq!(v["mean_error_m"], w["mean_error_m"]);
 
     let svg = dir.path().join("b.svg");
-    let o = trailprint(&[
-        "render",
-        "--building",
-        file_s,
-        "--walk",
-        walk,
-        "--kernel",
-        "60,8,4",
-        "-o",
-        svg.to_str().expect("utf-8 path"),
-    ]);
+    let o = trailprint(
+        &[
+            &["render"][..],
+            &on_walk,
+            &["-o", svg.to_str().expect("utf-8 path")],
+        ]
+        .concat(),
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&svg).expect("svg written");
     assert_eq!(text.matches("class=\"floor\"").count(), 2);

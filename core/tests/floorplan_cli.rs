@@ -8,7 +8,7 @@ use std::path::Path;
 use trailprint::Store;
 use trailprint::radiomap::{ScanRow, read_jsonl, read_uji_csv};
 
-use crate::store_common::run;
+use crate::store_common::{run, temp_db};
 
 fn fixture(name: &str) -> String {
     format!(
@@ -69,8 +69,7 @@ fn same(a: &ScanRow, b: &ScanRow) {
 
 #[test]
 fn floor_plan_to_plan_simulation_picture_and_exports() {
-    let dir = tempfile::tempdir().unwrap();
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     let db = db.as_path();
 
     let out = ok(
@@ -357,8 +356,7 @@ fn floor_plan_to_plan_simulation_picture_and_exports() {
 
 #[test]
 fn import_to_a_file_and_refusals() {
-    let dir = tempfile::tempdir().unwrap();
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     let out_path = dir.path().join("mall.json");
     let out = ok(
         &db,

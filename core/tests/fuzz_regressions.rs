@@ -55,10 +55,8 @@ fn valid_import(imp: &trailprint::floorplan::FloorplanImport, name: &str) {
 #[test]
 fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
     let input = text("osm-room-half-a-degree.geojson");
-    let err = within(30, move || {
-        import_osm_text(&input, "room.geojson", &ImportOptions::default())
-    })
-    .expect_err("a 37 km room is not an indoor floor plan");
+    let err = replay_osm_as(&input, "room.geojson", 30)
+        .expect_err("a 37 km room is not an indoor floor plan");
     let msg = err.to_string();
     assert_names(
         &msg,
@@ -355,17 +353,8 @@ fn session_seed_once_committed_as_crash_32c3a55e_replays_cleanly() {
 /// An IMDF input of the `floorplan_imdf` target (the files NUL-separated, in the target's
 /// order) as the importer's file map.
 fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
-    const FILES: [&str; 7] = [
-        "level.geojson",
-        "unit.geojson",
-        "opening.geojson",
-        "amenity.geojson",
-        "relationship.geojson",
-        "venue.geojson",
-        "building.geojson",
-    ];
     let bytes = std::fs::read(fixture(name)).expect(name);
-    FILES
+    trailprint::floorplan::imdf::LAYERS
         .iter()
         .zip(bytes.split(|&b| b == 0))
         .filter(|(_, part)| !part.is_empty())
@@ -384,13 +373,8 @@ fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
 /// with the parts left apart reported.
 #[test]
 fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
-    use trailprint::floorplan::import_imdf_files;
-
-    let files = imdf_files("imdf-unit-two-degrees-long-a.bin");
-    let err = within(60, move || {
-        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
-    })
-    .expect_err("a unit 73 km long is over the grid limit");
+    let err = replay_imdf("imdf-unit-two-degrees-long-a.bin")
+        .expect_err("a unit 73 km long is over the grid limit");
     let msg = err.to_string();
     assert_names(
         &msg,
@@ -403,11 +387,7 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
     );
 
     let name = "imdf-unit-two-degrees-long-b.bin";
-    let files = imdf_files(name);
-    let imp = within(60, move || {
-        import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
-    })
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let imp = replay_imdf(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     valid_import(&imp, name);
     assert!(
         !imp.dropped.is_empty(),
@@ -423,18 +403,35 @@ fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
 
 /// Imports the OSM fixture `name` as `fuzz.geojson`, failing the test after 60 s.
 fn replay_osm(name: &str) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
-    let input = text(name);
-    within(60, move || {
-        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
+    replay_osm_as(&text(name), "fuzz.geojson", 60)
+}
+
+/// Imports OSM GeoJSON text as `origin`, failing the test after `secs` seconds.
+fn replay_osm_as(
+    input: &str,
+    origin: &'static str,
+    secs: u64,
+) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
+    let input = input.to_string();
+    within(secs, move || {
+        import_osm_text(&input, origin, &ImportOptions::default())
     })
 }
 
 /// Imports the IMDF fixture `name` (NUL-separated files) as `fuzz-imdf`, failing the test
 /// after 60 s.
 fn replay_imdf(name: &str) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
-    let files = imdf_files(name);
-    within(60, move || {
-        trailprint::floorplan::import_imdf_files(&files, "fuzz-imdf", &ImportOptions::default())
+    replay_imdf_as(imdf_files(name), "fuzz-imdf", 60)
+}
+
+/// Imports IMDF files as `origin`, failing the test after `secs` seconds.
+fn replay_imdf_as(
+    files: std::collections::HashMap<String, String>,
+    origin: &'static str,
+    secs: u64,
+) -> trailprint::Result<trailprint::floorplan::FloorplanImport> {
+    within(secs, move || {
+        trailprint::floorplan::import_imdf_files(&files, origin, &ImportOptions::default())
     })
 }
 
@@ -467,10 +464,8 @@ fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
 #[test]
 fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
     let input = text("osm-room-a-degree-long.geojson");
-    let err = within(30, move || {
-        import_osm_text(&input, "big.geojson", &ImportOptions::default())
-    })
-    .expect_err("a room 111 km long is over the grid limit");
+    let err = replay_osm_as(&input, "big.geojson", 30)
+        .expect_err("a room 111 km long is over the grid limit");
     let msg = err.to_string();
     assert_names(
         &msg,
@@ -492,11 +487,7 @@ fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
 #[test]
 fn an_osm_space_with_a_few_vertices_cut_off_bridges_in_bounded_time() {
     let name = "osm-bridge-scan-65aa4573.geojson";
-    let input = text(name);
-    let imp = within(60, move || {
-        import_osm_text(&input, "fuzz.geojson", &ImportOptions::default())
-    })
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let imp = replay_osm(name).unwrap_or_else(|e| panic!("{name}: {e}"));
     valid_import(&imp, name);
 }
 
@@ -507,10 +498,8 @@ fn an_osm_space_with_a_few_vertices_cut_off_bridges_in_bounded_time() {
 #[test]
 fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
     let input = text("osm-space-beyond-range-bf79aaf7.geojson");
-    let err = within(30, move || {
-        import_osm_text(&input, "far.geojson", &ImportOptions::default())
-    })
-    .expect_err("a corridor 2,769 km away is beyond the building format's range");
+    let err = replay_osm_as(&input, "far.geojson", 30)
+        .expect_err("a corridor 2,769 km away is beyond the building format's range");
     let msg = err.to_string();
     assert_names(
         &msg,
@@ -613,13 +602,9 @@ fn imdf_square_hall(side_m: f64) -> std::collections::HashMap<String, String> {
 #[test]
 fn a_hall_hundreds_of_metres_square_imports_in_bounded_time() {
     use trailprint::Building;
-    use trailprint::floorplan::import_imdf_files;
 
     let files = imdf_square_hall(300.0);
-    let imp = within(20, move || {
-        import_imdf_files(&files, "hall-300m", &ImportOptions::default())
-    })
-    .expect("a 300 m hall is a valid floor plan");
+    let imp = replay_imdf_as(files, "hall-300m", 20).expect("a 300 m hall is a valid floor plan");
     // A 2 m grid over 300 m: 150 x 150 points, 2 x 150 x 149 grid edges.
     assert_eq!(imp.stats.vertices, 150 * 150);
     assert_eq!(imp.stats.edges, 2 * 150 * 149);

@@ -2,7 +2,7 @@
 
 use crate::plan_common;
 
-use plan_common::{grid, request};
+use plan_common::{assert_sound, grid, request};
 use proptest::prelude::*;
 use trailprint::plan::{Algorithm, Control, plan};
 
@@ -26,17 +26,7 @@ proptest! {
                 req.time_limit = Some(std::time::Duration::from_millis(1500));
             }
             let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-            let walk = &r.walk_indices;
-            prop_assert_eq!(walk[0], s);
-            prop_assert_eq!(*walk.last().expect("non-empty"), t);
-            b.check_walk(walk).expect("real edges");
-            prop_assert!(b.walk_length(walk) <= budget + 1e-9, "{alg}: {} > {budget}", b.walk_length(walk));
-            prop_assert!((r.length_m - b.walk_length(walk)).abs() < 1e-9);
-            prop_assert_eq!(&r.walk, &b.walk_ids(walk));
-            // The reported utility is the walk's.
-            let e = trailprint::utility::UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
-            let u = e.utility(walk).expect("utility");
-            prop_assert!((u - r.utility_nats).abs() < 1e-9 * u.abs().max(1.0), "{alg}: {u} vs {}", r.utility_nats);
+            assert_sound(&b, &req, &r, alg.name());
         }
     }
 }

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
-use plan_common::{grid, instance, kernel, problem, request};
+use plan_common::{assert_sound, grid, instance, kernel, problem, request};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -18,40 +18,11 @@ use trailprint::plan::genetic::{Genetic, crossover, mutate, random_walk};
 use trailprint::plan::greedy::Greedy;
 use trailprint::plan::local_search::LocalSearch;
 use trailprint::plan::{
-    Algorithm, Control, Observer, Params, PlanRequest, PlanResult, Problem, Progress, Run, Solver,
-    Termination, plan,
+    Algorithm, Control, Observer, Params, PlanRequest, Problem, Progress, Run, Solver, Termination,
+    plan,
 };
 use trailprint::surveyor::Surveyor;
 use trailprint::utility::UtilityEngine;
-
-/// Checks what every plan promises: a real walk from the start to the end within the
-/// budget, whose reported length, ids and utility are the walk's (utility evaluated by a
-/// fresh engine).
-fn assert_sound(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult, what: &str) {
-    let w = &r.walk_indices;
-    assert_eq!(
-        w.first(),
-        b.vertex_index(&req.start).as_ref(),
-        "{what}: start"
-    );
-    assert_eq!(w.last(), b.vertex_index(&req.end).as_ref(), "{what}: end");
-    b.check_walk(w).unwrap_or_else(|e| panic!("{what}: {e}"));
-    let len = b.walk_length(w);
-    assert!(
-        len <= req.budget + 1e-9,
-        "{what}: {len} m > {} m",
-        req.budget
-    );
-    assert!((r.length_m - len).abs() < 1e-9, "{what}: reported length");
-    assert_eq!(r.walk, b.walk_ids(w), "{what}: ids");
-    let e = UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
-    let u = e.utility(w).expect("utility");
-    assert!(
-        (u - r.utility_nats).abs() <= 1e-9 * u.abs().max(1.0),
-        "{what}: reported {} vs evaluated {u}",
-        r.utility_nats
-    );
-}
 
 /// The paper's rule (Algorithm 1): take the candidate of best gain per metre; stop as soon
 /// as it does not fit, even when a worse-ratio candidate would. Hand-built so that it

@@ -7,7 +7,7 @@ use crate::store_common;
 
 use std::collections::BTreeMap;
 
-use store_common::{assert_healthy, fixtures, shared_instance, tables};
+use store_common::{assert_healthy, fixtures, shared_instance, tables, temp_db};
 use trailprint::building::BuildingFile;
 use trailprint::gp::Kernel;
 use trailprint::store::{
@@ -580,8 +580,7 @@ fn collected_fingerprints_export_as_csv_and_json() {
 
 #[test]
 fn file_store_readers_and_in_memory_limits() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     let store = Store::open(&db).expect("open");
     let id = import(&store, &shared_instance("area-one.json"));
     let reader = store.reader().expect("reader");

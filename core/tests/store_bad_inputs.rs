@@ -9,12 +9,13 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use store_common::{BIN, SIMULATE_DEMO_ROBOT, dump_file, fixtures, run, run_ok, shared_instance};
+use store_common::{
+    BIN, SIMULATE_DEMO_ROBOT, dump_file, fixtures, run, run_ok, shared_instance, temp_db,
+};
 
 /// A database holding Area One, in a fresh temp dir.
 fn seeded_db() -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (dir, db) = temp_db();
     run_ok(
         &db,
         &[

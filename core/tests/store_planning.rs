@@ -6,6 +6,7 @@
 #![allow(clippy::expect_used)] // tests and their helpers may expect
 
 use crate::store_common;
+use crate::store_common::temp_db;
 
 use trailprint::gp::{Kernel, fit_kernel};
 use trailprint::plan::{Algorithm, Control, PlanSettings};
@@ -191,8 +192,7 @@ fn a_bundle_over_the_limit_is_refused_before_it_is_parsed() {
 #[cfg(unix)]
 #[test]
 fn the_command_line_plans_a_stored_building_with_the_stored_fit() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
+    let (_dir, db) = temp_db();
     let id = {
         let store = Store::open(&db).expect("open");
         let id = store

@@ -15,18 +15,9 @@
 use std::collections::HashMap;
 
 use libfuzzer_sys::fuzz_target;
+use trailprint::floorplan::imdf::LAYERS;
 use trailprint::floorplan::{import_imdf_files, import_imdf_zip};
 use trailprint_fuzz::{check_floorplan, floorplan_options};
-
-const FILES: [&str; 7] = [
-    "level.geojson",
-    "unit.geojson",
-    "opening.geojson",
-    "amenity.geojson",
-    "relationship.geojson",
-    "venue.geojson",
-    "building.geojson",
-];
 
 fuzz_target!(|data: &[u8]| {
     let options = floorplan_options();
@@ -35,7 +26,7 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let mut files = HashMap::new();
-    for (name, part) in FILES.iter().zip(data.split(|&b| b == 0)) {
+    for (name, part) in LAYERS.iter().zip(data.split(|&b| b == 0)) {
         let Ok(text) = std::str::from_utf8(part) else {
             return;
         };

@@ -143,6 +143,19 @@ fn unit_kind(category: &str) -> Option<SpaceKind> {
     })
 }
 
+/// The feature files of an IMDF data set the importer reads (as [`read_files`] takes
+/// them; `level` and `unit` are required, the others optional). Other files of an
+/// archive are ignored.
+pub const LAYERS: [&str; 7] = [
+    "level.geojson",
+    "unit.geojson",
+    "opening.geojson",
+    "amenity.geojson",
+    "relationship.geojson",
+    "venue.geojson",
+    "building.geojson",
+];
+
 /// Reads an IMDF folder or zip into a plan in metres.
 pub(crate) fn read(path: &Path) -> Result<Plan> {
     read_files(&files_of(path)?, &path.display().to_string())

@@ -53,6 +53,21 @@ struct Ctx {
     isa: Isa,
 }
 
+impl Ctx {
+    /// Kernel values between `p` and points `from..` of `q`, into `out` (see
+    /// [`simd::kernel_row_isa`]).
+    #[inline(always)]
+    fn kernel_row<const FMA: bool>(
+        &self,
+        p: (f64, f64, f64),
+        q: &Points,
+        from: usize,
+        out: &mut [f64],
+    ) {
+        simd::kernel_row_isa::<FMA>(self.isa, self.sf2, self.inv_ell, p, q, from, out);
+    }
+}
+
 /// What the dense whole-walk path ([`super::dense`]) copies instead of recomputing: the
 /// prior observations' kernel blocks and `A`, all raw (not factored).
 #[derive(Debug, Clone, Default)]
@@ -144,31 +159,13 @@ fn fill_observations<const FMA: bool>(
     for i in 0..nd {
         let row = &mut a[(o + i) * ld..(o + i + 1) * ld];
         row[o + i..o + nd].copy_from_slice(&prior.dd[i * nd + i..(i + 1) * nd]);
-        let pi = (prior.pts.x[i], prior.pts.y[i], prior.pts.floor[i]);
-        simd::kernel_row_isa::<FMA>(
-            ctx.isa,
-            ctx.sf2,
-            ctx.inv_ell,
-            pi,
-            rp,
-            0,
-            &mut row[o + nd..o + ns],
-        );
+        ctx.kernel_row::<FMA>(prior.pts.at(i), rp, 0, &mut row[o + nd..o + ns]);
         row[o + ns..].fill(0.0);
     }
     for (r, (_, noise)) in obs.iter().enumerate() {
         let i = nd + r;
         let row = &mut a[(o + i) * ld..(o + i + 1) * ld];
-        let pr = (rp.x[r], rp.y[r], rp.floor[r]);
-        simd::kernel_row_isa::<FMA>(
-            ctx.isa,
-            ctx.sf2,
-            ctx.inv_ell,
-            pr,
-            rp,
-            r,
-            &mut row[o + i..o + ns],
-        );
+        ctx.kernel_row::<FMA>(rp.at(r), rp, r, &mut row[o + i..o + ns]);
         row[o + i] += ctx.sn2 + noise;
         row[o + ns..].fill(0.0);
     }
@@ -212,16 +209,7 @@ fn dense_gain_s_side<const FMA: bool>(
         for (d, x) in row[nv..nv + nd].iter_mut().enumerate() {
             *x = prior.dv[d * nv + v];
         }
-        let pv = (ctx.vertices.x[v], ctx.vertices.y[v], ctx.vertices.floor[v]);
-        simd::kernel_row_isa::<FMA>(
-            ctx.isa,
-            ctx.sf2,
-            ctx.inv_ell,
-            pv,
-            rp,
-            0,
-            &mut row[nv + nd..n],
-        );
+        ctx.kernel_row::<FMA>(ctx.vertices.at(v), rp, 0, &mut row[nv + nd..n]);
         row[n..].fill(0.0);
     }
     fill_observations::<FMA>(ctx, prior, obs, rp, a, ld, nv);
@@ -255,16 +243,7 @@ fn dense_gain_v_side<const FMA: bool>(
     for r in 0..nr {
         let i = nd + r;
         let row = &mut a[i * ld..(i + 1) * ld];
-        let pr = (rp.x[r], rp.y[r], rp.floor[r]);
-        simd::kernel_row_isa::<FMA>(
-            ctx.isa,
-            ctx.sf2,
-            ctx.inv_ell,
-            pr,
-            &ctx.vertices,
-            0,
-            &mut row[nd + nr..n],
-        );
+        ctx.kernel_row::<FMA>(rp.at(r), &ctx.vertices, 0, &mut row[nd + nr..n]);
     }
     for v in 0..nv {
         let i = nd + nr + v;
@@ -468,7 +447,7 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -
     // Xt (n0 x m): row j holds L^-1-transformed cross covariances, X = L^-1 K_{old,new}.
     let mut xt = vec![0.0; n0 * m];
     for j in 0..n0 {
-        let pj = (f.pts.x[j], f.pts.y[j], f.pts.floor[j]);
+        let pj = f.pts.at(j);
         let (done, rest) = xt.split_at_mut(j * m);
         let row = &mut rest[..m];
         simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pj, &newp, row);
@@ -491,7 +470,7 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -
     // Schur complement S = K_nn + N - X^T X (upper), then S = U^T U.
     let mut s = vec![0.0; m * m];
     for a in 0..m {
-        let pa = (newp.x[a], newp.y[a], newp.floor[a]);
+        let pa = newp.at(a);
         simd::kernel_row_from::<FMA>(
             ctx.sf2,
             ctx.inv_ell,
@@ -509,7 +488,7 @@ fn add_batch<const FMA: bool>(f: &mut Factor, ctx: &Ctx, obs: &[(Point, f64)]) -
     // W rows of the new observations: (K_{new,V} - X^T W_old) solved with U^T.
     let mut wn = vec![0.0; m * nv];
     for i in 0..m {
-        let pi = (newp.x[i], newp.y[i], newp.floor[i]);
+        let pi = newp.at(i);
         let row = &mut wn[i * nv..i * nv + nv];
         simd::kernel_row::<FMA>(ctx.sf2, ctx.inv_ell, pi, &ctx.vertices, row);
         let mut j0 = 0;

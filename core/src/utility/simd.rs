@@ -443,6 +443,11 @@ impl Points {
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
+    /// Point `i` as the `(x, y, floor)` triple the kernel rows take.
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> (f64, f64, f64) {
+        (self.x[i], self.y[i], self.floor[i])
+    }
     /// The coordinates of points `from..`, at most `len` of them (x, y, floor).
     pub fn tail(&self, from: usize, len: usize) -> (&[f64], &[f64], &[f64]) {
         let from = from.min(self.len());

@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use trailprint::Building;
 use trailprint::gp::Kernel;
-use trailprint::plan::{Algorithm, PlanRequest, Problem};
+use trailprint::plan::{Algorithm, PlanRequest, PlanResult, Problem};
 use trailprint::surveyor::Surveyor;
+use trailprint::utility::UtilityEngine;
 
 /// One of the paper-shaped instances, from the repository's copies in `core/tests/fixtures`
 /// (byte for byte the files of `shared/instances/`), so a checkout anywhere can run them.
@@ -116,4 +117,33 @@ pub fn brute_force(p: &Problem) -> (f64, Vec<usize>) {
     let mut best = (f64::NEG_INFINITY, Vec::new());
     rec(p, &mut vec![p.start], 0.0, &mut best);
     best
+}
+
+/// Checks what every plan promises: a real walk from the start to the end within the
+/// budget, whose reported length, ids and utility are the walk's (utility evaluated by a
+/// fresh engine).
+pub fn assert_sound(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult, what: &str) {
+    let w = &r.walk_indices;
+    assert_eq!(
+        w.first(),
+        b.vertex_index(&req.start).as_ref(),
+        "{what}: start"
+    );
+    assert_eq!(w.last(), b.vertex_index(&req.end).as_ref(), "{what}: end");
+    b.check_walk(w).unwrap_or_else(|e| panic!("{what}: {e}"));
+    let len = b.walk_length(w);
+    assert!(
+        len <= req.budget + 1e-9,
+        "{what}: {len} m > {} m",
+        req.budget
+    );
+    assert!((r.length_m - len).abs() < 1e-9, "{what}: reported length");
+    assert_eq!(r.walk, b.walk_ids(w), "{what}: ids");
+    let e = UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
+    let u = e.utility(w).expect("utility");
+    assert!(
+        (u - r.utility_nats).abs() <= 1e-9 * u.abs().max(1.0),
+        "{what}: reported {} vs evaluated {u}",
+        r.utility_nats
+    );
 }

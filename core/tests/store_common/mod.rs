@@ -98,6 +98,12 @@ pub fn shell_words(line: &str) -> Vec<String> {
     out
 }
 
+/// The words of a literal argument list (`"--seed 4 --json"`): for options whose values
+/// hold no white space; paths, which may, are passed as separate elements.
+pub fn words(line: &str) -> Vec<&str> {
+    line.split_whitespace().collect()
+}
+
 /// Runs the binary with `args` (no `--db`).
 pub fn trailprint(args: &[&str]) -> Output {
     Command::new(BIN)
@@ -111,6 +117,21 @@ pub fn demo_name() -> String {
     trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
         .expect("demo")
         .name
+}
+
+/// A temporary directory and the path of a database file in it (not yet created); the
+/// directory and all in it go when the guard drops.
+pub fn temp_db() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    (dir, db)
+}
+
+/// [`temp_db`] with the demo building imported by the command line.
+pub fn demo_db() -> (tempfile::TempDir, PathBuf) {
+    let (dir, db) = temp_db();
+    run_ok(&db, &["import", DEMO_BUILDING]);
+    (dir, db)
 }
 
 /// Runs the binary with `--db db` and `args`.
