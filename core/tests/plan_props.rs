@@ -2,9 +2,9 @@
 
 use crate::plan_common;
 
-use plan_common::{assert_sound, grid, request};
+use plan_common::{every_algorithm_is_sound, grid};
 use proptest::prelude::*;
-use trailprint::plan::{Algorithm, Control, plan};
+use trailprint::plan::Algorithm;
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
@@ -19,14 +19,9 @@ proptest! {
         let (s, t) = (s % n, t % n);
         let m = trailprint::plan::Metric::new(&b);
         let budget = m.dist(s, t) + extra + 0.5;
-        for alg in Algorithm::ALL {
-            let mut req = request(&b, s, t, budget, alg);
-            req.seed = seed;
-            if alg == Algorithm::Exact || alg == Algorithm::RecursiveGreedy {
-                req.time_limit = Some(std::time::Duration::from_millis(1500));
-            }
-            let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-            assert_sound(&b, &req, &r, alg.name());
-        }
+        every_algorithm_is_sound(&b, (s, t), budget, seed, |alg| {
+            matches!(alg, Algorithm::Exact | Algorithm::RecursiveGreedy)
+                .then(|| std::time::Duration::from_millis(1500))
+        });
     }
 }

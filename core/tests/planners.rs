@@ -9,7 +9,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
-use plan_common::{assert_sound, grid, instance, kernel, problem, request};
+use plan_common::{
+    assert_sound, every_algorithm_is_sound, grid, instance, kernel, problem, request,
+};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -499,12 +501,8 @@ proptest! {
         prop_assert!((30..=60).contains(&n));
         let (s, t) = (s % n, t % n);
         let budget = p_budget(&b, s, t, extra);
-        for alg in Algorithm::ALL {
-            let mut req = request(&b, s, t, budget, alg);
-            req.seed = seed;
-            req.time_limit = Some(Duration::from_millis(if alg == Algorithm::Auto { 300 } else { 600 }));
-            let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-            assert_sound(&b, &req, &r, alg.name());
-        }
+        every_algorithm_is_sound(&b, (s, t), budget, seed, |alg| {
+            Some(Duration::from_millis(if alg == Algorithm::Auto { 300 } else { 600 }))
+        });
     }
 }

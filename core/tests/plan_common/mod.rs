@@ -147,3 +147,22 @@ pub fn assert_sound(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult, what: 
         r.utility_nats
     );
 }
+
+/// Plans `s` to `t` within `budget` with every algorithm (seed `seed`, time limit
+/// `limit(algorithm)`) and checks each result with [`assert_sound`].
+pub fn every_algorithm_is_sound(
+    b: &Arc<Building>,
+    (s, t): (usize, usize),
+    budget: f64,
+    seed: u64,
+    limit: impl Fn(Algorithm) -> Option<std::time::Duration>,
+) {
+    for alg in Algorithm::ALL {
+        let mut req = request(b, s, t, budget, alg);
+        req.seed = seed;
+        req.time_limit = limit(alg).or(req.time_limit);
+        let r = trailprint::plan::plan(b.clone(), &req, &trailprint::plan::Control::new())
+            .expect("plan");
+        assert_sound(b, &req, &r, alg.name());
+    }
+}
