@@ -84,7 +84,7 @@ impl TeamRequest {
                     self.kernel,
                     &self.settings,
                 );
-                r.seed = self.settings.seed.wrapping_add(i as u64);
+                r.settings.seed = self.settings.seed.wrapping_add(i as u64);
                 r
             })
             .collect()
@@ -105,7 +105,7 @@ pub struct TeamPlan {
 }
 
 fn observations(b: &Building, req: &PlanRequest, walk: &[usize]) -> Result<Vec<Observation>> {
-    Ok(sample_walk(b, walk, &req.model, &req.kernel)?
+    Ok(sample_walk(b, walk, &req.settings.model, &req.kernel)?
         .iter()
         .map(Observation::from)
         .collect())
@@ -198,7 +198,7 @@ pub fn plan_team(
             let mut changed = false;
             for i in 0..k {
                 let mut r = request_for(i);
-                r.seed = r.seed.wrapping_add(1000 * (round as u64 + 1));
+                r.settings.seed = r.settings.seed.wrapping_add(1000 * (round as u64 + 1));
                 let mut cond = prior.to_vec();
                 for (j, w) in walks.iter().enumerate() {
                     if j != i {

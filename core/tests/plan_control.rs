@@ -45,7 +45,7 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     let _serial = crate::serial();
     let b = instance("area-two.json");
     let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
-    req.algorithm = Algorithm::Exact; // hours without a limit
+    req.settings.algorithm = Algorithm::Exact; // hours without a limit
     let token = Arc::new(AtomicBool::new(false));
     let (tx, rx) = std::sync::mpsc::channel();
     let first = Arc::new(FirstBest(Mutex::new(Some(tx))));
@@ -71,8 +71,8 @@ fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     assert_eq!(r.walk.first().map(String::as_str), Some("b00"));
     assert_eq!(r.walk.last().map(String::as_str), Some("b00"));
     assert!(r.length_m <= 140.0 + 1e-9, "{} m", r.length_m);
-    let engine =
-        trailprint::utility::UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
+    let engine = trailprint::utility::UtilityEngine::new(b.clone(), req.kernel, req.settings.model)
+        .expect("engine");
     let exact = engine.utility(&r.walk_indices).expect("utility");
     assert!((exact - r.utility_nats).abs() <= 1e-9 * exact.max(1.0));
     // The search's incumbent (greedy plus local search) is far better than the shortest
@@ -164,12 +164,12 @@ fn same_seed_same_result() {
         Algorithm::Auto,
     ] {
         let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
-        req.algorithm = alg;
-        req.seed = 11;
-        req.params.population = 40;
-        req.params.iterations = 200;
+        req.settings.algorithm = alg;
+        req.settings.seed = 11;
+        req.settings.params.population = 40;
+        req.settings.params.iterations = 200;
         // Long enough for auto's fixed work: the walk must not depend on the clock.
-        req.time_limit = Some(Duration::from_secs(60));
+        req.settings.time_limit = Some(Duration::from_secs(60));
         let a = plan(b.clone(), &req, &Control::new()).expect("a");
         let c = plan(b.clone(), &req, &Control::new()).expect("c");
         assert_eq!(a.walk, c.walk, "{alg}");
@@ -182,8 +182,8 @@ fn time_limit_returns_the_best_so_far() {
     let _serial = crate::serial();
     let b = instance("area-two.json");
     let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
-    req.algorithm = Algorithm::Exact;
-    req.time_limit = Some(Duration::from_millis(400));
+    req.settings.algorithm = Algorithm::Exact;
+    req.settings.time_limit = Some(Duration::from_millis(400));
     let t = Instant::now();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     assert!(t.elapsed() < Duration::from_secs(10));
@@ -236,7 +236,7 @@ fn request_validation_errors_name_the_problem() {
         e.to_string().contains("r0c0") && e.to_string().contains("27.000"),
         "{e}"
     );
-    let e = err(&|r| r.params.mutation = 1.5);
+    let e = err(&|r| r.settings.params.mutation = 1.5);
     assert!(e.to_string().contains("mutation"), "{e}");
     let e = err(&|r| r.kernel.ell = -1.0);
     assert!(e.to_string().contains("ell"), "{e}");
@@ -247,7 +247,7 @@ fn result_json_has_the_spec_shape() {
     let _serial = crate::serial();
     let b = instance("area-one.json");
     let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
-    req.algorithm = Algorithm::Exact;
+    req.settings.algorithm = Algorithm::Exact;
     let r = plan(b, &req, &Control::new()).expect("plan");
     let v: serde_json::Value = serde_json::to_value(&r).expect("json");
     for key in [
@@ -273,7 +273,7 @@ fn result_json_has_the_spec_shape() {
     assert_eq!(back.walk, r.walk);
     // The request round-trips too (time limit as seconds).
     let mut q = PlanRequest::new("a", "b", 10.0, kernel());
-    q.time_limit = Some(Duration::from_millis(1500));
+    q.settings.time_limit = Some(Duration::from_millis(1500));
     let text = serde_json::to_string(&q).expect("json");
     assert!(text.contains("\"time_limit\":1.5"), "{text}");
     let q2: PlanRequest = serde_json::from_str(&text).expect("parse");

@@ -62,11 +62,11 @@ fn coverage_walks_to_the_nearest_unwalked_edge_while_the_way_back_fits() {
     // the way back (6 m); v3-v4 would need 8 m.
     let b = line(5);
     let mut req = PlanRequest::new("v0", "v0", 6.0, kernel());
-    req.algorithm = Algorithm::Coverage;
+    req.settings.algorithm = Algorithm::Coverage;
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     assert_eq!(r.walk, ["v0", "v1", "v2", "v3", "v2", "v1", "v0"]);
     assert_eq!(r.termination, Termination::Completed);
-    let exact = UtilityEngine::new(b, req.kernel, req.model)
+    let exact = UtilityEngine::new(b, req.kernel, req.settings.model)
         .expect("engine")
         .utility(&r.walk_indices)
         .expect("utility");
@@ -80,9 +80,9 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
     let budget = 0.5 * b.total_edge_length();
     let start = b.vertices[0].id.clone();
     let mut req = PlanRequest::new(&start, &start, budget, k);
-    req.algorithm = Algorithm::Coverage;
+    req.settings.algorithm = Algorithm::Coverage;
     let cov = plan(b.clone(), &req, &Control::new()).expect("coverage");
-    req.algorithm = Algorithm::Auto;
+    req.settings.algorithm = Algorithm::Auto;
     let auto = plan(b.clone(), &req, &Control::new()).expect("auto");
     assert!(
         auto.length_m >= 0.95 * budget && auto.length_m <= budget + 1e-9,
@@ -96,7 +96,7 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
         cov.utility_nats
     );
     // What auto reports is the exact f_D of SPEC 3, not its search surrogate.
-    let exact = UtilityEngine::new(b.clone(), k, req.model)
+    let exact = UtilityEngine::new(b.clone(), k, req.settings.model)
         .expect("engine")
         .utility(&auto.walk_indices)
         .expect("utility");
@@ -111,8 +111,8 @@ fn every_algorithm_honours_its_time_limit_on_a_large_building() {
     let limit = Duration::from_millis(800);
     for alg in Algorithm::ALL {
         let mut req = PlanRequest::new(&start, &start, 200.0, k);
-        req.algorithm = alg;
-        req.time_limit = Some(limit);
+        req.settings.algorithm = alg;
+        req.settings.time_limit = Some(limit);
         let t0 = Instant::now();
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
         let took = t0.elapsed();
@@ -144,7 +144,7 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
     for (b, k, budget) in [(office, k, 200.0), (area_two, k2, 100.0)] {
         let start = b.vertices[0].id.clone();
         let mut req = PlanRequest::new(&start, &start, budget, k);
-        req.time_limit = Some(Duration::from_millis(1));
+        req.settings.time_limit = Some(Duration::from_millis(1));
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
         assert!(
             r.length_m >= 0.9 * budget && r.length_m <= budget + 1e-9,
@@ -153,7 +153,7 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
             r.length_m
         );
         assert_eq!(r.termination, Termination::TimeLimit, "{}", b.name);
-        let exact = UtilityEngine::new(b.clone(), k, req.model)
+        let exact = UtilityEngine::new(b.clone(), k, req.settings.model)
             .expect("engine")
             .utility(&r.walk_indices)
             .expect("utility");
@@ -186,7 +186,7 @@ fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
     let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
     let mut req = PlanRequest::new(&start, &start, budget, k);
-    req.time_limit = Some(Duration::from_secs(30));
+    req.settings.time_limit = Some(Duration::from_secs(30));
     let obs = Arc::new(Bests::default());
     let token = Arc::new(AtomicBool::new(false));
     let control = Control::new()
@@ -232,9 +232,9 @@ fn a_request_beyond_the_memory_budget_is_refused_before_allocating() {
     // little even for 20 vertices' planning threads, 512 MiB is plenty.
     let small = line(20);
     let mut req = PlanRequest::new("v0", "v10", 20.0, kernel());
-    req.memory_budget = 1 << 20;
+    req.settings.memory_budget = 1 << 20;
     assert!(plan(small.clone(), &req, &Control::new()).is_err());
-    req.memory_budget = 512 << 20;
+    req.settings.memory_budget = 512 << 20;
     plan(small, &req, &Control::new()).expect("fits");
 }
 
@@ -243,7 +243,7 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
     let _serial = crate::serial();
     let b = line(5); // 4 m of edges
     let mut req = PlanRequest::new("v0", "v0", 100_000.0, kernel());
-    req.algorithm = Algorithm::Genetic;
+    req.settings.algorithm = Algorithm::Genetic;
     let e = plan(b, &req, &Control::new()).expect_err("refused");
     let msg = e.to_string();
     assert!(
@@ -259,12 +259,12 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
     let mut req = PlanRequest::new(&start, &start, budget, k);
-    req.model = Surveyor::human();
+    req.settings.model = Surveyor::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     let p = Problem::new(
         b.clone(),
         k,
-        req.model,
+        req.settings.model,
         r.walk_indices[0],
         r.walk_indices[0],
         budget,
@@ -286,8 +286,8 @@ fn auto_never_returns_less_than_a_walk_it_has_shown() {
     for (model, frac) in [(Surveyor::robot(), 1.0), (Surveyor::robot(), 0.5)] {
         let budget = frac * b.total_edge_length();
         let mut req = PlanRequest::new(&start, &start, budget, k);
-        req.model = model;
-        req.time_limit = Some(Duration::from_secs(2));
+        req.settings.model = model;
+        req.settings.time_limit = Some(Duration::from_secs(2));
         let obs = Arc::new(Bests::default());
         let r = plan(b.clone(), &req, &Control::new().with_observer(obs.clone())).expect("plan");
         let shown = obs.utilities.lock().expect("lock").clone();
@@ -298,7 +298,7 @@ fn auto_never_returns_less_than_a_walk_it_has_shown() {
             "{frac} of the edges: returned {} nats after showing {best_shown}",
             r.utility_nats
         );
-        let exact = UtilityEngine::new(b.clone(), req.kernel, req.model)
+        let exact = UtilityEngine::new(b.clone(), req.kernel, req.settings.model)
             .expect("engine")
             .utility(&r.walk_indices)
             .expect("utility");

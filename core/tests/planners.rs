@@ -68,7 +68,7 @@ fn paper_greedy_stops_when_the_best_ratio_does_not_fit() {
     let g = Greedy::feasible().solve(&p, &run).expect("feasible greedy");
     assert_eq!(g.walk, [s, a, s]);
     let mut req = request(&b, s, s, budget, Algorithm::Auto);
-    req.time_limit = Some(Duration::from_secs(5));
+    req.settings.time_limit = Some(Duration::from_secs(5));
     let r = plan(b.clone(), &req, &Control::new()).expect("auto");
     assert_sound(&b, &req, &r, "auto");
     assert!(
@@ -226,7 +226,7 @@ fn auto_is_never_below_its_greedy_stage() {
             .solve(&p, &Run::new(Control::new(), None))
             .expect("greedy");
         let mut req = request(&b, s, t, budget, Algorithm::Auto);
-        req.time_limit = Some(Duration::from_secs(2));
+        req.settings.time_limit = Some(Duration::from_secs(2));
         let r = plan(b.clone(), &req, &Control::new()).expect("auto");
         assert_sound(&b, &req, &r, "auto");
         assert!(
@@ -245,11 +245,11 @@ fn long_request(b: &Building, alg: Algorithm) -> PlanRequest {
     let mut req = request(b, 0, 0, 140.0, alg);
     req.start = "b00".into();
     req.end = "b00".into();
-    req.params = Params::default();
-    req.params.population = 2000;
-    req.params.generations = 50;
-    req.params.iterations = 1_000_000;
-    req.params.depth = 3;
+    req.settings.params = Params::default();
+    req.settings.params.population = 2000;
+    req.settings.params.generations = 50;
+    req.settings.params.iterations = 1_000_000;
+    req.settings.params.depth = 3;
     req
 }
 
@@ -261,7 +261,7 @@ fn every_algorithm_honours_a_cancel_before_it_starts() {
     let b = instance("area-two.json");
     for alg in Algorithm::ALL {
         let mut req = long_request(&b, alg);
-        req.time_limit = None;
+        req.settings.time_limit = None;
         let control = Control::new().with_cancel_token(Arc::new(AtomicBool::new(true)));
         let t = Instant::now();
         let r = plan(b.clone(), &req, &control).expect("a cancelled plan still answers");
@@ -287,7 +287,7 @@ fn every_algorithm_honours_its_time_limit() {
     let mut late = Vec::new();
     for alg in Algorithm::ALL {
         let mut req = long_request(&b, alg);
-        req.time_limit = Some(limit);
+        req.settings.time_limit = Some(limit);
         let t = Instant::now();
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
         let took = t.elapsed();
@@ -383,9 +383,9 @@ fn every_algorithm_stops_mid_run_on_a_cancel() {
         // Searches of minutes whose first report comes within a few seconds (the paper's
         // population for genetic, depth 2 for recursive greedy), and a limit none reaches
         // (auto's default is 2 s).
-        req.params.population = 200;
-        req.params.depth = 2;
-        req.time_limit = Some(Duration::from_secs(600));
+        req.settings.params.population = 200;
+        req.settings.params.depth = 2;
+        req.settings.time_limit = Some(Duration::from_secs(600));
         let (tx, rx) = mpsc::channel();
         let token = Arc::new(AtomicBool::new(false));
         let started = Arc::new(Started {

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use trailprint::building::Building;
 use trailprint::gp::{Kernel, fit_kernel};
-use trailprint::plan::{Algorithm, Control, PlanRequest, plan};
+use trailprint::plan::{Algorithm, Control, PlanRequest, PlanSettings, plan};
 use trailprint::session::replan::distances_from;
 use trailprint::session::sim::{SimOptions, World, simulate};
 use trailprint::session::{
@@ -36,13 +36,14 @@ fn planned(
         .expect("import")
         .id;
     let kernel = fit_kernel(&b.pilot).expect("fit").kernel;
-    let req = PlanRequest {
+    let settings = PlanSettings {
         model: surveyor,
         algorithm,
         seed: 7,
         time_limit: Some(std::time::Duration::from_millis(500)),
-        ..PlanRequest::new("f0-c00", "f0-r5-door", budget, kernel)
+        ..PlanSettings::default()
     };
+    let req = PlanRequest::with_settings("f0-c00", "f0-r5-door", budget, kernel, &settings);
     let res = plan(Arc::new(b), &req, &Control::new()).expect("plan");
     let pid = store
         .save_plan(

@@ -108,8 +108,8 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
             .expect("building"),
     );
     let mut req = PlanRequest::new(&start, &end, 25.0, kernel);
-    req.algorithm = trailprint::plan::Algorithm::Genetic;
-    req.seed = 3;
+    req.settings.algorithm = trailprint::plan::Algorithm::Genetic;
+    req.settings.seed = 3;
     let prior = desk
         .collected_observations(BuildingRef::Name(&building.name), &kernel)
         .expect("prior");

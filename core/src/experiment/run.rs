@@ -48,13 +48,15 @@ pub fn run_experiment(
                             start: config.start.clone(),
                             end: config.end.clone(),
                             budget,
-                            model: config.model,
                             kernel: config.kernel,
-                            algorithm,
-                            seed: ps,
-                            time_limit: config.time_limit_for(algorithm),
-                            params: config.params,
-                            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+                            settings: crate::plan::PlanSettings {
+                                model: config.model,
+                                algorithm,
+                                seed: ps,
+                                time_limit: config.time_limit_for(algorithm),
+                                params: config.params,
+                                memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+                            },
                         };
                         let r = plan(building.clone(), &req, control)?;
                         let n = r.samples;

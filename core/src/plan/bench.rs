@@ -90,13 +90,15 @@ pub fn run_bench(
                         start: case.start.clone(),
                         end: case.end.clone(),
                         budget,
-                        model: cfg.model,
                         kernel: case.kernel,
-                        algorithm: alg,
-                        seed,
-                        time_limit: cfg.limit(alg),
-                        params: cfg.params,
-                        memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+                        settings: crate::plan::PlanSettings {
+                            model: cfg.model,
+                            algorithm: alg,
+                            seed,
+                            time_limit: cfg.limit(alg),
+                            params: cfg.params,
+                            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+                        },
                     };
                     let r = plan(case.building.clone(), &req, control)?;
                     let row = BenchRow {

@@ -117,14 +117,14 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
             MAX_BUDGET_FACTOR * total
         )));
     }
-    if req.memory_budget == 0 {
+    if req.settings.memory_budget == 0 {
         return Err(Error::InvalidRequest(
             "memory budget must be a positive number of bytes".into(),
         ));
     }
     req.kernel.validate("kernel")?;
-    req.model.validate()?;
-    let p = &req.params;
+    req.settings.model.validate()?;
+    let p = &req.settings.params;
     let bad = |m: String| Err(Error::InvalidRequest(m));
     if p.population < 2 {
         return bad(format!(
@@ -202,7 +202,7 @@ pub fn plan_with_prior(
     let (start, end) = validate(&building, req)?;
     check_memory(&building, req, prior.len())?;
     let run = Run::starting_at(control.clone(), req.effective_time_limit(), started)
-        .for_algorithm(req.algorithm);
+        .for_algorithm(req.settings.algorithm);
     let metric = Arc::new(Metric::new(&building));
     let shortest = metric.dist(start, end);
     if !shortest.is_finite() || shortest > req.budget + BUDGET_EPS {
@@ -213,7 +213,8 @@ pub fn plan_with_prior(
             shortest,
         });
     }
-    let engine = UtilityEngine::with_prior(building.clone(), req.kernel, req.model, prior)?;
+    let engine =
+        UtilityEngine::with_prior(building.clone(), req.kernel, req.settings.model, prior)?;
     let problem = Problem {
         building: building.clone(),
         engine,
@@ -222,7 +223,11 @@ pub fn plan_with_prior(
         end,
         budget: req.budget,
     };
-    let solver = solver_for(req.algorithm, req.seed, &req.params);
+    let solver = solver_for(
+        req.settings.algorithm,
+        req.settings.seed,
+        &req.settings.params,
+    );
     let out = match solver.solve(&problem, &run) {
         Ok(mut out) => {
             if run.control.is_cancelled() {
@@ -261,15 +266,17 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     } else {
         0.0
     };
-    let ns = budget / req.model.spacing().max(1e-3) + 2.0;
+    let ns = budget / req.settings.model.spacing().max(1e-3) + 2.0;
     let metric = 12.0 * nv * nv;
     let n = nd + ns + nv + 16.0;
     let threads = rayon::current_num_threads().max(1) as f64;
     // The large-building search (auto and coverage beyond `auto::LARGE_VERTICES`) only
     // evaluates whole walks; the other planners also grow walks incrementally (rows of
     // `L` and `W` per sample, from the engine's posterior of the pilot data).
-    let whole_walks = matches!(req.algorithm, Algorithm::Auto | Algorithm::Coverage)
-        && building.len() > auto::LARGE_VERTICES;
+    let whole_walks = matches!(
+        req.settings.algorithm,
+        Algorithm::Auto | Algorithm::Coverage
+    ) && building.len() > auto::LARGE_VERTICES;
     let vertex_matrices = if whole_walks { 2.0 } else { 3.0 };
     let engine = 8.0 * (vertex_matrices * nv * nv + nd * nd + 2.0 * nd * nv);
     let incremental = if whole_walks {
@@ -285,7 +292,7 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
         .map(|e| e.length)
         .fold(f64::INFINITY, f64::min)
         .max(1e-3);
-    let marks = if req.algorithm == Algorithm::Exact {
+    let marks = if req.settings.algorithm == Algorithm::Exact {
         (budget / min_edge).min(1e6) * nv * nv
     } else {
         0.0
@@ -299,7 +306,7 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
 /// Refuses a request whose estimated working set exceeds its memory budget.
 fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<()> {
     let need = estimate_memory(building, req, prior);
-    if need <= req.memory_budget {
+    if need <= req.settings.memory_budget {
         return Ok(());
     }
     let mib = |b: u64| b.div_ceil(1 << 20);
@@ -314,7 +321,7 @@ fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<
         building.len(),
         req.budget,
         mib(need),
-        mib(req.memory_budget),
+        mib(req.settings.memory_budget),
         mib(need)
     )))
 }
@@ -324,23 +331,28 @@ fn finish(problem: &Problem, req: &PlanRequest, out: Outcome, run: &Run) -> Resu
     problem.check(&out.walk).map_err(|e| {
         Error::Numerical(format!(
             "internal error: {} returned an infeasible walk: {e}",
-            req.algorithm
+            req.settings.algorithm
         ))
     })?;
     let b = &problem.building;
-    let samples = sample_walk(b, &out.walk, &req.model, &req.kernel)?.len();
+    let samples = sample_walk(b, &out.walk, &req.settings.model, &req.kernel)?.len();
     // The last report is the result itself, so that "best so far" ends at what is returned.
     problem.offer(run, &out.walk, out.utility);
-    run.report(req.algorithm, 1.0, Some(out.utility), "done".into());
+    run.report(
+        req.settings.algorithm,
+        1.0,
+        Some(out.utility),
+        "done".into(),
+    );
     Ok(PlanResult {
-        algorithm: req.algorithm,
+        algorithm: req.settings.algorithm,
         walk: b.walk_ids(&out.walk),
         length_m: problem.length(&out.walk),
         budget_m: req.budget,
         samples,
         utility_nats: out.utility,
         elapsed_ms: run.elapsed().as_millis() as u64,
-        seed: req.seed,
+        seed: req.settings.seed,
         kernel: req.kernel,
         optimal: out.optimal,
         nodes: out.nodes,

@@ -217,7 +217,7 @@ mod opt_secs {
     }
 }
 
-/// What to plan.
+/// What to plan: the route, the budget and the kernel, and how to plan it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlanRequest {
     /// Start vertex id `v_s`.
@@ -226,26 +226,13 @@ pub struct PlanRequest {
     pub end: String,
     /// Budget `B`, metres.
     pub budget: f64,
-    /// Who walks.
-    #[serde(default)]
-    pub model: Surveyor,
     /// Kernel hyperparameters.
     pub kernel: Kernel,
-    #[serde(default)]
-    pub algorithm: Algorithm,
-    /// Seed of every random choice.
-    #[serde(default)]
-    pub seed: u64,
-    /// Stop with the best walk so far after this long (`auto`: 2 s when `None`).
-    #[serde(default, with = "opt_secs")]
-    pub time_limit: Option<Duration>,
-    #[serde(default)]
-    pub params: Params,
-    /// Most memory the plan may use, bytes (default [`DEFAULT_MEMORY_BUDGET`]): a request
-    /// whose working set would exceed it is refused before anything is allocated
-    /// ([`Error::InvalidRequest`] naming the size and what to change).
-    #[serde(default = "default_memory_budget")]
-    pub memory_budget: u64,
+    /// Who walks, the algorithm and its limits. In JSON its fields stand beside the
+    /// others (`{"start": .., "algorithm": "auto", "seed": 3, ..}`), as before it was a
+    /// struct of its own.
+    #[serde(flatten)]
+    pub settings: PlanSettings,
 }
 
 /// How to plan, apart from where and with which kernel: what a team's members share, and
@@ -266,7 +253,9 @@ pub struct PlanSettings {
     pub time_limit: Option<Duration>,
     #[serde(default)]
     pub params: Params,
-    /// Most memory the plan may use, bytes (default [`DEFAULT_MEMORY_BUDGET`]).
+    /// Most memory the plan may use, bytes (default [`DEFAULT_MEMORY_BUDGET`]): a request
+    /// whose working set would exceed it is refused before anything is allocated
+    /// ([`Error::InvalidRequest`] naming the size and what to change).
     #[serde(default = "default_memory_budget")]
     pub memory_budget: u64,
 }
@@ -322,32 +311,16 @@ impl PlanRequest {
             start: start.to_string(),
             end: end.to_string(),
             budget,
-            model: s.model,
             kernel,
-            algorithm: s.algorithm,
-            seed: s.seed,
-            time_limit: s.time_limit,
-            params: s.params,
-            memory_budget: s.memory_budget,
-        }
-    }
-
-    /// The planner settings of this request (everything but the route and the kernel).
-    pub fn settings(&self) -> PlanSettings {
-        PlanSettings {
-            model: self.model,
-            algorithm: self.algorithm,
-            seed: self.seed,
-            time_limit: self.time_limit,
-            params: self.params,
-            memory_budget: self.memory_budget,
+            settings: *s,
         }
     }
 
     /// The time limit in effect (the request's, else the algorithm's default).
     pub fn effective_time_limit(&self) -> Option<Duration> {
-        self.time_limit
-            .or_else(|| self.algorithm.default_time_limit())
+        self.settings
+            .time_limit
+            .or_else(|| self.settings.algorithm.default_time_limit())
     }
 }
 
@@ -401,4 +374,42 @@ pub struct PlanResult {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub nodes: Option<u64>,
     pub termination: Termination,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A request's JSON keeps the settings beside the route (the form callers have always
+    /// written), reads back equal, and takes the defaults for what it leaves out.
+    #[test]
+    fn request_json_is_flat_and_round_trips() {
+        let mut req = PlanRequest::new("a", "b", 12.5, Kernel::new(40.0, 6.0, 4.0));
+        req.settings.seed = 9;
+        req.settings.algorithm = Algorithm::Genetic;
+        req.settings.time_limit = Some(Duration::from_millis(1500));
+        let v = serde_json::to_value(&req).expect("serialise");
+        assert!(v.get("settings").is_none(), "{v}");
+        assert_eq!(v["seed"], 9);
+        assert_eq!(v["algorithm"], "genetic");
+        assert_eq!(v["time_limit"], 1.5);
+        let back: PlanRequest = serde_json::from_value(v).expect("read back");
+        assert_eq!(back, req);
+
+        let short: PlanRequest = serde_json::from_str(
+            r#"{"start": "a", "end": "a", "budget": 3, "kernel": {"sf2": 40, "ell": 6, "sn2": 4}}"#,
+        )
+        .expect("defaults");
+        assert_eq!(short.settings, PlanSettings::default());
+        let bad = serde_json::from_str::<PlanRequest>(
+            r#"{"start": "a", "end": "a", "budget": 3, "kernel": {"sf2": 40, "ell": 6, "sn2": 4},
+                "time_limit": -1}"#,
+        )
+        .expect_err("negative limit");
+        assert!(
+            bad.to_string()
+                .contains("time_limit must be a non-negative"),
+            "{bad}"
+        );
+    }
 }

@@ -214,13 +214,15 @@ impl Replanner for PlannerReplanner {
             start: b.vertices[r.start].id.clone(),
             end: b.vertices[r.end].id.clone(),
             budget: r.budget_m,
-            model: r.model,
             kernel: r.kernel,
-            algorithm: self.algorithm,
-            seed: r.seed,
-            time_limit: self.time_limit,
-            params: self.params,
-            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+            settings: crate::plan::PlanSettings {
+                model: r.model,
+                algorithm: self.algorithm,
+                seed: r.seed,
+                time_limit: self.time_limit,
+                params: self.params,
+                memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
+            },
         };
         let res =
             crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;

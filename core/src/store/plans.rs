@@ -264,7 +264,7 @@ impl PlanRecord {
             start: req.start.clone(),
             end: req.end.clone(),
             budget_m: req.budget,
-            surveyor: Some(req.model),
+            surveyor: Some(req.settings.model),
             kernel: res.kernel,
             algorithm: res.algorithm.into(),
             seed: Some(res.seed),

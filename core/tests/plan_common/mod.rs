@@ -78,12 +78,12 @@ pub fn kernel() -> Kernel {
 
 pub fn request(b: &Building, s: usize, t: usize, budget: f64, alg: Algorithm) -> PlanRequest {
     let mut r = PlanRequest::new(&b.vertices[s].id, &b.vertices[t].id, budget, kernel());
-    r.algorithm = alg;
-    r.seed = 7;
-    r.params.population = 30;
-    r.params.generations = 3;
-    r.params.iterations = 150;
-    r.time_limit = Some(std::time::Duration::from_secs(if alg == Algorithm::Auto {
+    r.settings.algorithm = alg;
+    r.settings.seed = 7;
+    r.settings.params.population = 30;
+    r.settings.params.generations = 3;
+    r.settings.params.iterations = 150;
+    r.settings.time_limit = Some(std::time::Duration::from_secs(if alg == Algorithm::Auto {
         1
     } else {
         20
@@ -139,7 +139,7 @@ pub fn assert_sound(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult, what: 
     );
     assert!((r.length_m - len).abs() < 1e-9, "{what}: reported length");
     assert_eq!(r.walk, b.walk_ids(w), "{what}: ids");
-    let e = UtilityEngine::new(b.clone(), req.kernel, req.model).expect("engine");
+    let e = UtilityEngine::new(b.clone(), req.kernel, req.settings.model).expect("engine");
     let u = e.utility(w).expect("utility");
     assert!(
         (u - r.utility_nats).abs() <= 1e-9 * u.abs().max(1.0),
@@ -159,8 +159,8 @@ pub fn every_algorithm_is_sound(
 ) {
     for alg in Algorithm::ALL {
         let mut req = request(b, s, t, budget, alg);
-        req.seed = seed;
-        req.time_limit = limit(alg).or(req.time_limit);
+        req.settings.seed = seed;
+        req.settings.time_limit = limit(alg).or(req.settings.time_limit);
         let r = trailprint::plan::plan(b.clone(), &req, &trailprint::plan::Control::new())
             .expect("plan");
         assert_sound(b, &req, &r, alg.name());

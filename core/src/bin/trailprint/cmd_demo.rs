@@ -86,9 +86,9 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         ),
     };
     let mut req = PlanRequest::new(&start, &end, a.budget, kernel);
-    req.model = a.model.model()?;
-    req.algorithm = a.algorithm;
-    req.seed = a.seed;
+    req.settings.model = a.model.model()?;
+    req.settings.algorithm = a.algorithm;
+    req.settings.seed = a.seed;
     let result = plan(building.clone(), &req, &trailprint::plan::Control::new())?;
     let plan_id = store.save_plan(
         BuildingRef::Id(info.id),
@@ -119,8 +119,8 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     println!(
         "request       {start} -> {end}, budget {} m, {}, planner {}",
         a.budget,
-        crate::walk_text::model_text(&req.model),
-        req.algorithm.name()
+        crate::walk_text::model_text(&req.settings.model),
+        req.settings.algorithm.name()
     );
     println!("plan id       {plan_id}");
     println!(
@@ -135,7 +135,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         &building,
         &result.walk_indices,
         result.length_m,
-        &req.model,
+        &req.settings.model,
         a.model.speed,
         false,
     );

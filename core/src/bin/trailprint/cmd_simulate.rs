@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args as ClapArgs;
 use trailprint::building::Building;
-use trailprint::plan::{Algorithm, Control, Params, PlanRequest, plan};
+use trailprint::plan::{Algorithm, Control, PlanRequest, PlanSettings, plan};
 use trailprint::session::sim::{SimOptions, World, simulate};
 use trailprint::session::{
     Ack, Event, GreedyReplanner, PlannerReplanner, Replanner, Session, SessionLog, SessionOptions,
@@ -266,13 +266,14 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         start: a.route.start.clone(),
         end: a.route.end.clone(),
         budget: a.route.budget,
-        model: surveyor,
         kernel,
-        algorithm: a.algorithm,
-        seed: a.seed,
-        time_limit,
-        params: Params::default(),
-        memory_budget: trailprint::plan::DEFAULT_MEMORY_BUDGET,
+        settings: PlanSettings {
+            model: surveyor,
+            algorithm: a.algorithm,
+            seed: a.seed,
+            time_limit,
+            ..PlanSettings::default()
+        },
     };
     let planned = plan(b.clone(), &req, &Control::new())?;
     let plan_id = store.save_plan(
