@@ -44,20 +44,21 @@ pub fn run_experiment(
                 let (result, samples, reused) = match &first {
                     Some((r, n)) if reuse => (r.clone(), *n, true),
                     _ => {
-                        let req = PlanRequest {
-                            start: config.start.clone(),
-                            end: config.end.clone(),
-                            budget,
-                            kernel: config.kernel,
-                            settings: crate::plan::PlanSettings {
-                                model: config.model,
-                                algorithm,
-                                seed: ps,
-                                time_limit: config.time_limit_for(algorithm),
-                                params: config.params,
-                                memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
-                            },
+                        let settings = crate::plan::PlanSettings {
+                            model: config.model,
+                            algorithm,
+                            seed: ps,
+                            time_limit: config.time_limit_for(algorithm),
+                            params: config.params,
+                            ..Default::default()
                         };
+                        let req = PlanRequest::with_settings(
+                            &config.start,
+                            &config.end,
+                            budget,
+                            config.kernel,
+                            &settings,
+                        );
                         let r = plan(building.clone(), &req, control)?;
                         let n = r.samples;
                         if first.is_none() {

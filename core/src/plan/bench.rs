@@ -86,20 +86,21 @@ pub fn run_bench(
                     cfg.seeds.iter().take(1).copied().collect()
                 };
                 for seed in seeds {
-                    let req = PlanRequest {
-                        start: case.start.clone(),
-                        end: case.end.clone(),
-                        budget,
-                        kernel: case.kernel,
-                        settings: crate::plan::PlanSettings {
-                            model: cfg.model,
-                            algorithm: alg,
-                            seed,
-                            time_limit: cfg.limit(alg),
-                            params: cfg.params,
-                            memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
-                        },
+                    let settings = crate::plan::PlanSettings {
+                        model: cfg.model,
+                        algorithm: alg,
+                        seed,
+                        time_limit: cfg.limit(alg),
+                        params: cfg.params,
+                        ..Default::default()
                     };
+                    let req = PlanRequest::with_settings(
+                        &case.start,
+                        &case.end,
+                        budget,
+                        case.kernel,
+                        &settings,
+                    );
                     let r = plan(case.building.clone(), &req, control)?;
                     let row = BenchRow {
                         building: case.building.name.clone(),

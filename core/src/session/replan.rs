@@ -210,20 +210,21 @@ impl PlannerReplanner {
 impl Replanner for PlannerReplanner {
     fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
         let b = r.building;
-        let req = crate::plan::PlanRequest {
-            start: b.vertices[r.start].id.clone(),
-            end: b.vertices[r.end].id.clone(),
-            budget: r.budget_m,
-            kernel: r.kernel,
-            settings: crate::plan::PlanSettings {
-                model: r.model,
-                algorithm: self.algorithm,
-                seed: r.seed,
-                time_limit: self.time_limit,
-                params: self.params,
-                memory_budget: crate::plan::DEFAULT_MEMORY_BUDGET,
-            },
+        let settings = crate::plan::PlanSettings {
+            model: r.model,
+            algorithm: self.algorithm,
+            seed: r.seed,
+            time_limit: self.time_limit,
+            params: self.params,
+            ..Default::default()
         };
+        let req = crate::plan::PlanRequest::with_settings(
+            &b.vertices[r.start].id,
+            &b.vertices[r.end].id,
+            r.budget_m,
+            r.kernel,
+            &settings,
+        );
         let res =
             crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;
         Ok(res.walk_indices)
