@@ -44,14 +44,14 @@ pub fn run_experiment(
                 let (result, samples, reused) = match &first {
                     Some((r, n)) if reuse => (r.clone(), *n, true),
                     _ => {
-                        let settings = crate::plan::PlanSettings {
-                            model: config.model,
+                        let limit = config.time_limit_for(algorithm);
+                        let settings = crate::plan::PlanSettings::for_run(
+                            config.model,
+                            config.params,
                             algorithm,
-                            seed: ps,
-                            time_limit: config.time_limit_for(algorithm),
-                            params: config.params,
-                            ..Default::default()
-                        };
+                            ps,
+                            limit,
+                        );
                         let req = PlanRequest::with_settings(
                             &config.start,
                             &config.end,

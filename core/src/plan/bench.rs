@@ -86,14 +86,13 @@ pub fn run_bench(
                     cfg.seeds.iter().take(1).copied().collect()
                 };
                 for seed in seeds {
-                    let settings = crate::plan::PlanSettings {
-                        model: cfg.model,
-                        algorithm: alg,
+                    let settings = crate::plan::PlanSettings::for_run(
+                        cfg.model,
+                        cfg.params,
+                        alg,
                         seed,
-                        time_limit: cfg.limit(alg),
-                        params: cfg.params,
-                        ..Default::default()
-                    };
+                        cfg.limit(alg),
+                    );
                     let req = PlanRequest::with_settings(
                         &case.start,
                         &case.end,

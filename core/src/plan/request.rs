@@ -260,6 +260,28 @@ pub struct PlanSettings {
     pub memory_budget: u64,
 }
 
+impl PlanSettings {
+    /// One run of a study that varies the algorithm and the seed over a fixed surveyor and
+    /// tuning (the paper's experiment, the planner benchmark); the memory budget is the
+    /// default.
+    pub fn for_run(
+        model: Surveyor,
+        params: Params,
+        algorithm: Algorithm,
+        seed: u64,
+        time_limit: Option<Duration>,
+    ) -> Self {
+        PlanSettings {
+            model,
+            algorithm,
+            seed,
+            time_limit,
+            params,
+            ..PlanSettings::default()
+        }
+    }
+}
+
 impl Default for PlanSettings {
     /// The defaults of [`PlanRequest::new`]: `auto`, robot model, seed 0.
     fn default() -> Self {
