@@ -119,3 +119,12 @@ impl Error {
         }
     }
 }
+
+/// The first of `fields` (a name and its value) that is not a finite number `>= 0`: the one
+/// rule of the option checks (session, evaluation, propagation), each of which words its
+/// own message.
+pub(crate) fn first_negative<'a>(
+    fields: impl IntoIterator<Item = (&'a str, f64)>,
+) -> Option<(&'a str, f64)> {
+    fields.into_iter().find(|&(_, v)| !v.is_finite() || v < 0.0)
+}

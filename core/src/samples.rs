@@ -358,20 +358,11 @@ mod tests {
             turn_threshold_deg: 30.0,
         };
         // a -> b -> d is straight: no check-in at b; a -> b -> c turns 90 degrees at b.
-        let straight = sample_walk(
-            &b,
-            &b.resolve_walk(&["a", "b", "d"]).expect("w"),
-            &model,
-            &k,
-        )
-        .expect("s");
-        let turning = sample_walk(
-            &b,
-            &b.resolve_walk(&["a", "b", "c"]).expect("w"),
-            &model,
-            &k,
-        )
-        .expect("s");
+        let sample = |ids: &[&str]| {
+            sample_walk(&b, &b.resolve_walk(ids).expect("w"), &model, &k).expect("s")
+        };
+        let straight = sample(&["a", "b", "d"]);
+        let turning = sample(&["a", "b", "c"]);
         assert_eq!(straight[0].extra_noise, 0.0, "the start is a check-in");
         assert!((straight[6].since_checkin - 3.0).abs() < 1e-12);
         assert!((straight[6].extra_noise - k.label_noise(0.3)).abs() < 1e-15);

@@ -60,16 +60,14 @@ impl Default for EvalOptions {
 
 impl EvalOptions {
     fn validate(&self) -> Result<()> {
-        for (name, v) in [
+        if let Some((name, v)) = crate::error::first_negative([
             ("grid step", self.grid_step_m),
             ("grid margin", self.grid_margin_m),
             ("floor penalty", self.floor_penalty_m),
-        ] {
-            if !v.is_finite() || v < 0.0 {
-                return Err(Error::InvalidRequest(format!(
-                    "evaluation {name} must be a finite number >= 0, got {v}"
-                )));
-            }
+        ]) {
+            return Err(Error::InvalidRequest(format!(
+                "evaluation {name} must be a finite number >= 0, got {v}"
+            )));
         }
         if self.grid_step_m < 0.01 {
             return Err(Error::InvalidRequest(format!(

@@ -21,33 +21,47 @@ impl Experiment {
             .collect()
     }
 
-    /// One point per algorithm and budget, from the summary rows.
-    fn line_series(&self, f: impl Fn(&SummaryRow) -> LinePoint) -> Vec<Series<LinePoint>> {
-        self.per_algorithm(|a| {
-            self.summary
-                .iter()
-                .filter(|r| r.algorithm == a)
-                .map(&f)
-                .collect()
-        })
+    /// A chart against budget: one line per algorithm with a point per summary row
+    /// (`point`), ticks at the configuration's budgets; `what` ends the title.
+    fn budget_chart(
+        &self,
+        what: &str,
+        y_label: &str,
+        log_y: bool,
+        ref_lines: Vec<RefLine>,
+        point: impl Fn(&SummaryRow) -> LinePoint,
+    ) -> String {
+        LineChart {
+            title: format!("{}: {what} vs budget", self.building),
+            x_label: "budget (m)".into(),
+            y_label: y_label.into(),
+            series: self.per_algorithm(|a| {
+                self.summary
+                    .iter()
+                    .filter(|r| r.algorithm == a)
+                    .map(&point)
+                    .collect()
+            }),
+            ref_lines,
+            log_y,
+            x_ticks: self.config.budgets.clone(),
+        }
+        .to_svg()
     }
 
     /// Mean utility against budget, bars from the smallest to the largest run.
     pub fn utility_chart(&self) -> String {
-        LineChart {
-            title: format!("{}: utility vs budget", self.building),
-            x_label: "budget (m)".into(),
-            y_label: "utility f_D(P) (nats), mean and range over runs".into(),
-            series: self.line_series(|r| LinePoint {
+        self.budget_chart(
+            "utility",
+            "utility f_D(P) (nats), mean and range over runs",
+            false,
+            Vec::new(),
+            |r| LinePoint {
                 x: r.budget_m,
                 y: r.utility_mean,
                 bar: Some((r.utility_min, r.utility_max)),
-            }),
-            ref_lines: Vec::new(),
-            log_y: false,
-            x_ticks: self.config.budgets.clone(),
-        }
-        .to_svg()
+            },
+        )
     }
 
     /// Mean localization error against budget (bars: one standard deviation over runs),
@@ -66,40 +80,34 @@ impl Experiment {
                 label: format!("all {} dense positions: {:.2} m", b.samples, b.mean_error_m),
             });
         }
-        LineChart {
-            title: format!("{}: localization error vs budget", self.building),
-            x_label: "budget (m)".into(),
-            y_label: "mean localization error (m), ±1 sd over runs".into(),
-            series: self.line_series(|r| LinePoint {
+        self.budget_chart(
+            "localization error",
+            "mean localization error (m), ±1 sd over runs",
+            false,
+            refs,
+            |r| LinePoint {
                 x: r.budget_m,
                 y: r.error_mean_m,
                 bar: Some((r.error_mean_m - r.error_sd_m, r.error_mean_m + r.error_sd_m)),
-            }),
-            ref_lines: refs,
-            log_y: false,
-            x_ticks: self.config.budgets.clone(),
-        }
-        .to_svg()
+            },
+        )
     }
 
     /// Mean planning time against budget, seconds, logarithmic axis.
     pub fn runtime_chart(&self) -> String {
-        LineChart {
-            title: format!("{}: planning time vs budget", self.building),
-            x_label: "budget (m)".into(),
-            y_label: "planning time (s, log scale), mean over runs".into(),
-            series: self.line_series(|r| LinePoint {
+        self.budget_chart(
+            "planning time",
+            "planning time (s, log scale), mean over runs",
+            true,
+            Vec::new(),
+            |r| LinePoint {
                 // A plan under a millisecond shows at 1 ms rather than vanish off the
                 // log axis.
                 x: r.budget_m,
                 y: (r.elapsed_mean_ms / 1000.0).max(1e-3),
                 bar: None,
-            }),
-            ref_lines: Vec::new(),
-            log_y: true,
-            x_ticks: self.config.budgets.clone(),
-        }
-        .to_svg()
+            },
+        )
     }
 
     /// Utility against localization error, one point per run, with the correlations in

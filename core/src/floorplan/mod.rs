@@ -192,9 +192,7 @@ pub fn import_osm_text(
     origin: &str,
     options: &ImportOptions,
 ) -> Result<FloorplanImport> {
-    check_spacing(options.spacing_m)?;
-    let plan = osm::parse(text, origin)?;
-    finish(plan, Format::OsmIndoor, options, origin, origin)
+    import_with(Format::OsmIndoor, options, origin, || osm::parse(text, origin))
 }
 
 /// Imports an IMDF data set given as its files in memory (`"unit.geojson"` -> text, names
@@ -204,9 +202,7 @@ pub fn import_imdf_files(
     origin: &str,
     options: &ImportOptions,
 ) -> Result<FloorplanImport> {
-    check_spacing(options.spacing_m)?;
-    let plan = imdf::read_files(files, origin)?;
-    finish(plan, Format::Imdf, options, origin, origin)
+    import_with(Format::Imdf, options, origin, || imdf::read_files(files, origin))
 }
 
 /// Imports an IMDF zip archive given as bytes; `origin` names it in errors and is the
@@ -216,10 +212,22 @@ pub fn import_imdf_zip(
     origin: &str,
     options: &ImportOptions,
 ) -> Result<FloorplanImport> {
+    import_with(Format::Imdf, options, origin, || {
+        let files = imdf::files_of_zip(std::io::Cursor::new(bytes), Path::new(origin))?;
+        imdf::read_files(&files, origin)
+    })
+}
+
+/// An in-memory import: the spacing checked before anything is read, then `read`'s plan
+/// laid out, `origin` naming it in errors and standing in for a missing name.
+fn import_with(
+    format: Format,
+    options: &ImportOptions,
+    origin: &str,
+    read: impl FnOnce() -> Result<Plan>,
+) -> Result<FloorplanImport> {
     check_spacing(options.spacing_m)?;
-    let files = imdf::files_of_zip(std::io::Cursor::new(bytes), Path::new(origin))?;
-    let plan = imdf::read_files(&files, origin)?;
-    finish(plan, Format::Imdf, options, origin, origin)
+    finish(read()?, format, options, origin, origin)
 }
 
 fn finish(

@@ -299,30 +299,26 @@ mod tests {
 
     #[test]
     fn unsupported_pilot_data_gives_clear_errors() {
-        let e = fit_kernel(&[fp(0.0, 0.0, &[("a", -50.0)])]).expect_err("too few");
-        assert!(
-            e.to_string()
-                .contains("need pilot data at 3 or more locations, the building has 1"),
-            "{e}"
-        );
-        let pilot = vec![
-            fp(0.0, 0.0, &[("a", -50.0)]),
-            fp(1.0, 0.0, &[("b", -50.0)]),
-            fp(2.0, 0.0, &[("c", -50.0)]),
+        let line = |aps: [&str; 3]| -> Vec<Fingerprint> {
+            (0..3)
+                .map(|i| fp(i as f64, 0.0, &[(aps[i], -50.0)]))
+                .collect()
+        };
+        let cases = [
+            (
+                vec![fp(0.0, 0.0, &[("a", -50.0)])],
+                "need pilot data at 3 or more locations, the building has 1",
+            ),
+            (
+                line(["a", "b", "c"]),
+                "no access point is heard at half or more of the 3 pilot locations",
+            ),
+            (line(["a", "a", "a"]), "no spatial variation"),
         ];
-        let e = fit_kernel(&pilot).expect_err("no common ap");
-        assert!(
-            e.to_string()
-                .contains("no access point is heard at half or more of the 3 pilot locations"),
-            "{e}"
-        );
-        let pilot = vec![
-            fp(0.0, 0.0, &[("a", -50.0)]),
-            fp(1.0, 0.0, &[("a", -50.0)]),
-            fp(2.0, 0.0, &[("a", -50.0)]),
-        ];
-        let e = fit_kernel(&pilot).expect_err("constant");
-        assert!(e.to_string().contains("no spatial variation"), "{e}");
+        for (pilot, want) in cases {
+            let e = fit_kernel(&pilot).expect_err(want);
+            assert!(e.to_string().contains(want), "{e}");
+        }
     }
 
     /// Draws `aps` independent GP samples at `n` random locations and fits them.

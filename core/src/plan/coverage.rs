@@ -57,19 +57,6 @@ pub fn spread_walk(p: &Problem, radius: f64, run: &Run) -> Vec<usize> {
     build(p, radius, true, run)
 }
 
-/// Squared distance from `q` to the segment `a b` (same floor assumed).
-fn seg_dist2(q: &Point, a: &Point, b: &Point) -> f64 {
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let l2 = dx * dx + dy * dy;
-    let t = if l2 > 0.0 {
-        (((q.x - a.x) * dx + (q.y - a.y) * dy) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (px, py) = (a.x + t * dx - q.x, a.y + t * dy - q.y);
-    px * px + py * py
-}
-
 /// State of a construction: which edges are walked, which are within the radius of a
 /// walked one.
 struct Marks<'a> {
@@ -77,7 +64,7 @@ struct Marks<'a> {
     walked: Vec<bool>,
     near: Vec<bool>,
     mids: Vec<Point>,
-    r2: f64,
+    radius: f64,
 }
 
 impl<'a> Marks<'a> {
@@ -100,7 +87,7 @@ impl<'a> Marks<'a> {
             walked: vec![false; b.edges.len()],
             near: vec![false; b.edges.len()],
             mids,
-            r2: radius * radius,
+            radius,
         }
     }
 
@@ -115,12 +102,12 @@ impl<'a> Marks<'a> {
         }
         self.walked[e] = true;
         self.near[e] = true;
-        if self.r2 > 0.0 {
+        if self.radius > 0.0 {
             let (pa, pb) = (&b.vertices[u].pos, &b.vertices[v].pos);
             for (k, m) in self.mids.iter().enumerate() {
                 if !self.near[k]
                     && (m.floor == pa.floor || m.floor == pb.floor)
-                    && seg_dist2(m, pa, pb) <= self.r2
+                    && m.segment_projection(pa, pb).1 <= self.radius
                 {
                     self.near[k] = true;
                 }

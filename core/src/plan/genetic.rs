@@ -71,17 +71,11 @@ pub fn random_walk(p: &Problem, rng: &mut ChaCha8Rng) -> Vec<usize> {
     let mut opts: Vec<(usize, f64)> = Vec::new();
     while len < half {
         let v = *walk.last().unwrap_or(&p.start);
-        opts.clear();
-        for &(w, e) in b.neighbours(v) {
-            let l = b.edges[e].length;
-            if len + l <= half + super::BUDGET_EPS && p.fits(len + l + m.dist(w, p.end)) {
-                opts.push((w, l));
-            }
-        }
-        if opts.is_empty() {
+        let Some((w, l)) = p.random_step(v, rng, &mut opts, |w, l| {
+            len + l <= half + super::BUDGET_EPS && p.fits(len + l + m.dist(w, p.end))
+        }) else {
             break;
-        }
-        let (w, l) = opts[rng.random_range(0..opts.len())];
+        };
         walk.push(w);
         len += l;
     }

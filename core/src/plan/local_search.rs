@@ -174,24 +174,17 @@ fn random_move_at(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng, depth: usize) 
         let allowed = p.length(&w[i..=j]) + slack;
         let mut seg = vec![w[i]];
         let mut l = 0.0;
-        let b = &p.building;
         let mut opts: Vec<(usize, f64)> = Vec::new();
         loop {
             let v = *seg.last().unwrap_or(&w[i]);
             if v == w[j] && rng.random_bool(0.5) {
                 break;
             }
-            opts.clear();
-            for &(x, e) in b.neighbours(v) {
-                let el = b.edges[e].length;
-                if l + el + p.metric.dist(x, w[j]) <= allowed + super::BUDGET_EPS {
-                    opts.push((x, el));
-                }
-            }
-            if opts.is_empty() {
+            let Some((x, el)) = p.random_step(v, rng, &mut opts, |x, el| {
+                l + el + p.metric.dist(x, w[j]) <= allowed + super::BUDGET_EPS
+            }) else {
                 break;
-            }
-            let (x, el) = opts[rng.random_range(0..opts.len())];
+            };
             seg.push(x);
             l += el;
         }

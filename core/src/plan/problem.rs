@@ -3,6 +3,9 @@
 
 use std::sync::Arc;
 
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+
 use crate::building::Building;
 use crate::gp::Kernel;
 use crate::surveyor::Surveyor;
@@ -58,6 +61,29 @@ impl Problem {
     /// Whether a length fits the budget.
     pub fn fits(&self, length: f64) -> bool {
         length <= self.budget + BUDGET_EPS
+    }
+
+    /// One step of a random walk from `v`: a neighbour drawn uniformly from those that
+    /// `admits(neighbour, edge length)` accepts, with the edge's length; `None` when it
+    /// accepts none. `opts` is scratch space, kept by the caller across steps.
+    pub fn random_step(
+        &self,
+        v: usize,
+        rng: &mut ChaCha8Rng,
+        opts: &mut Vec<(usize, f64)>,
+        admits: impl Fn(usize, f64) -> bool,
+    ) -> Option<(usize, f64)> {
+        opts.clear();
+        for &(w, e) in self.building.neighbours(v) {
+            let l = self.building.edges[e].length;
+            if admits(w, l) {
+                opts.push((w, l));
+            }
+        }
+        if opts.is_empty() {
+            return None;
+        }
+        Some(opts[rng.random_range(0..opts.len())])
     }
 
     /// `C(P)` of a walk of adjacent vertices.

@@ -18,6 +18,16 @@ const LANE_PX: f64 = 4.5;
 /// Walks longer than this get a step number at every k-th vertex only.
 const MAX_NUMBERED: usize = 80;
 
+/// The floor one layer draws, with what every layer reads: the building, the scene (walks,
+/// track, samples), the floor's id and the drawing's layout.
+#[derive(Clone, Copy)]
+pub(super) struct FloorView<'a> {
+    pub building: &'a Building,
+    pub scene: &'a Scene,
+    pub floor: i64,
+    pub lay: &'a Layout,
+}
+
 /// An outline's points in the drawing's pixels, as an SVG `points` attribute.
 fn svg_points(points: &[[f64; 2]], lay: &Layout) -> String {
     let pts: Vec<String> = points
@@ -29,7 +39,8 @@ fn svg_points(points: &[[f64; 2]], lay: &Layout) -> String {
 
 /// The floor-plan outlines: building footprints, then walkable spaces (filled by kind),
 /// then walls; each element has the class `outline outline-<kind>`.
-pub(super) fn outlines(s: &mut String, building: &Building, floor: i64, lay: &Layout) {
+pub(super) fn outlines(s: &mut String, view: &FloorView) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     let order = |k: OutlineKind| match k {
         OutlineKind::Building => 0,
         OutlineKind::Room | OutlineKind::Corridor | OutlineKind::Area => 1,
@@ -68,7 +79,8 @@ pub(super) fn outlines(s: &mut String, building: &Building, floor: i64, lay: &La
 }
 
 /// The lines of the outlines of this floor without fill (over the heat map).
-pub(super) fn outline_lines(s: &mut String, building: &Building, floor: i64, lay: &Layout) {
+pub(super) fn outline_lines(s: &mut String, view: &FloorView) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     let list: Vec<_> = building
         .outlines
         .iter()
@@ -91,14 +103,8 @@ pub(super) fn outline_lines(s: &mut String, building: &Building, floor: i64, lay
 }
 
 /// The heat-map cells of this floor, clipped to its walkable outlines when it has any.
-pub(super) fn heat_cells(
-    s: &mut String,
-    building: &Building,
-    heat: &Heat,
-    floor: i64,
-    lay: &Layout,
-    options: &RenderOptions,
-) {
+pub(super) fn heat_cells(s: &mut String, view: &FloorView, heat: &Heat, options: &RenderOptions) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     let cell = options.grid_step_m * lay.scale;
     // On a floor plan, the cells are cut at the walls of the walkable outlines (cells
     // reach half a step past them, so that they meet the walls; see `heat_grid`).
@@ -146,13 +152,8 @@ pub(super) fn heat_cells(
 }
 
 /// Edges and vertices of this floor (the vertices block label space).
-pub(super) fn graph(
-    s: &mut String,
-    building: &Building,
-    floor: i64,
-    lay: &Layout,
-    placer: &mut Placer,
-) {
+pub(super) fn graph(s: &mut String, view: &FloorView, placer: &mut Placer) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     for e in &building.edges {
         let (a, b) = (building.vertices[e.a].pos, building.vertices[e.b].pos);
         if a.floor == floor && b.floor == floor {
@@ -179,13 +180,8 @@ pub(super) fn graph(
 
 /// Vertex ids of this floor, where there is room for them (placed last: markers, stairs
 /// and step numbers matter more).
-pub(super) fn graph_labels(
-    s: &mut String,
-    building: &Building,
-    floor: i64,
-    lay: &Layout,
-    placer: &mut Placer,
-) {
+pub(super) fn graph_labels(s: &mut String, view: &FloorView, placer: &mut Placer) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     for v in building.vertices.iter().filter(|v| v.pos.floor == floor) {
         let (x, y) = (lay.px(v.pos.x), lay.py(v.pos.y));
         if let Some((tx, ty)) = placer.place(x, y, v.id.chars().count(), 9.0) {
@@ -288,12 +284,11 @@ pub(super) fn has_repeated_edge(building: &Building, scene: &Scene) -> bool {
 /// "stairs to First (4 m)" or "elevator to First (18 m)" where there is room for it.
 pub(super) fn stairs(
     s: &mut String,
-    building: &Building,
-    floor: i64,
-    lay: &Layout,
+    view: &FloorView,
     placer: &mut Placer,
     floor_name: &dyn Fn(i64) -> String,
 ) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     for e in &building.edges {
         let (a, b) = (building.vertices[e.a].pos, building.vertices[e.b].pos);
         if (a.floor == floor) == (b.floor == floor) {
@@ -321,7 +316,8 @@ pub(super) fn stairs(
 }
 
 /// Pilot locations of this floor (orange squares).
-pub(super) fn pilot(s: &mut String, building: &Building, floor: i64, lay: &Layout) {
+pub(super) fn pilot(s: &mut String, view: &FloorView) {
+    let (building, floor, lay) = (view.building, view.floor, view.lay);
     for p in building.pilot.iter().filter(|p| p.floor == floor) {
         let _ = writeln!(
             s,
@@ -339,7 +335,8 @@ pub(super) fn pilot(s: &mut String, building: &Building, floor: i64, lay: &Layou
 /// drawn side by side, `LANE_PX` apart, so walking back and forth shows as two lines with
 /// opposite arrows. A walk's segments have the classes `walk walk-<i>`, plus `repeat` on an
 /// edge walked more than once.
-pub(super) fn walks(s: &mut String, building: &Building, scene: &Scene, floor: i64, lay: &Layout) {
+pub(super) fn walks(s: &mut String, view: &FloorView) {
+    let (building, scene, floor, lay) = (view.building, view.scene, view.floor, view.lay);
     let on = |v: usize| building.vertices[v].pos.floor == floor;
     let key = |a: usize, b: usize| (a.min(b), a.max(b));
     let mut count: HashMap<(usize, usize), usize> = HashMap::new();
@@ -392,7 +389,8 @@ pub(super) fn walks(s: &mut String, building: &Building, scene: &Scene, floor: i
 }
 
 /// The walked track of a session (estimated positions in order), dashed.
-pub(super) fn track(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
+pub(super) fn track(s: &mut String, view: &FloorView) {
+    let (scene, floor, lay) = (view.scene, view.floor, view.lay);
     let mut runs: Vec<Vec<String>> = vec![Vec::new()];
     for p in &scene.track {
         if p.floor == floor {
@@ -409,7 +407,8 @@ pub(super) fn track(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
 }
 
 /// Sample positions of this floor.
-pub(super) fn samples(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
+pub(super) fn samples(s: &mut String, view: &FloorView) {
+    let (scene, floor, lay) = (view.scene, view.floor, view.lay);
     for p in scene
         .samples
         .iter()
@@ -428,14 +427,8 @@ pub(super) fn samples(s: &mut String, scene: &Scene, floor: i64, lay: &Layout) {
 /// Start (green disc, "S") and end (dark square, "E") of every walk on this floor; when a
 /// walk starts and ends at the same vertex the square sits behind the disc with its
 /// corners showing, labelled "start = end". A team numbers them: "S1", "E1".
-pub(super) fn markers(
-    s: &mut String,
-    building: &Building,
-    scene: &Scene,
-    floor: i64,
-    lay: &Layout,
-    placer: &mut Placer,
-) {
+pub(super) fn markers(s: &mut String, view: &FloorView, placer: &mut Placer) {
+    let (building, scene, floor, lay) = (view.building, view.scene, view.floor, view.lay);
     let team = scene.walks.len() > 1;
     for (wi, w) in scene.walks.iter().enumerate() {
         let (Some(&first), Some(&last)) = (w.walk.first(), w.walk.last()) else {
@@ -503,14 +496,8 @@ pub(super) fn markers(
 /// Step numbers along the first walk: each vertex gets the numbers of the steps that
 /// reach it ("4,10" for a vertex walked through twice); a walk of more than
 /// `MAX_NUMBERED` vertices is numbered at every k-th step, start and end always.
-pub(super) fn step_numbers(
-    s: &mut String,
-    building: &Building,
-    scene: &Scene,
-    floor: i64,
-    lay: &Layout,
-    placer: &mut Placer,
-) {
+pub(super) fn step_numbers(s: &mut String, view: &FloorView, placer: &mut Placer) {
+    let (building, scene, floor, lay) = (view.building, view.scene, view.floor, view.lay);
     let Some(w) = scene.walks.first() else {
         return;
     };

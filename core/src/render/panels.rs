@@ -116,22 +116,28 @@ pub(super) fn floor_defs(
             r#"<g id="floor-{fi}" class="floor" data-floor="{}">"#,
             floor.id
         );
-        layers::outlines(s, building, floor.id, lay);
+        let view = layers::FloorView {
+            building,
+            scene,
+            floor: floor.id,
+            lay,
+        };
+        layers::outlines(s, &view);
         if let Some(h) = heat {
-            layers::heat_cells(s, building, h, floor.id, lay, options);
+            layers::heat_cells(s, &view, h, options);
             // Room and wall lines again over the heat map, so rooms stay visible.
-            layers::outline_lines(s, building, floor.id, lay);
+            layers::outline_lines(s, &view);
         }
-        layers::graph(s, building, floor.id, lay, &mut placer);
-        layers::pilot(s, building, floor.id, lay);
-        layers::walks(s, building, scene, floor.id, lay);
-        layers::track(s, scene, floor.id, lay);
-        layers::samples(s, scene, floor.id, lay);
-        layers::markers(s, building, scene, floor.id, lay, &mut placer);
-        layers::stairs(s, building, floor.id, lay, &mut placer, &name_of);
-        layers::step_numbers(s, building, scene, floor.id, lay, &mut placer);
+        layers::graph(s, &view, &mut placer);
+        layers::pilot(s, &view);
+        layers::walks(s, &view);
+        layers::track(s, &view);
+        layers::samples(s, &view);
+        layers::markers(s, &view, &mut placer);
+        layers::stairs(s, &view, &mut placer, &name_of);
+        layers::step_numbers(s, &view, &mut placer);
         if options.labels {
-            layers::graph_labels(s, building, floor.id, lay, &mut placer);
+            layers::graph_labels(s, &view, &mut placer);
         }
         let _ = writeln!(s, "</g>");
     }

@@ -65,17 +65,15 @@ impl Default for SessionOptions {
 impl SessionOptions {
     /// Checks every option; the message names the bad one.
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [
+        if let Some((name, v)) = crate::error::first_negative([
             ("off_route_slack_m", self.off_route_slack_m),
             ("off_route_slack_fraction", self.off_route_slack_fraction),
             ("robot_tolerance_m", self.robot_tolerance_m),
             ("calibration_weight_steps", self.calibration_weight_steps),
-        ] {
-            if !v.is_finite() || v < 0.0 {
-                return Err(Error::InvalidRequest(format!(
-                    "session options: {name} must be a finite number >= 0, got {v}"
-                )));
-            }
+        ]) {
+            return Err(Error::InvalidRequest(format!(
+                "session options: {name} must be a finite number >= 0, got {v}"
+            )));
         }
         Ok(())
     }

@@ -7,7 +7,7 @@ use std::path::Path;
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 use serde::Serialize;
 
-use super::{BuildingRef, building_id, group_readings, now_ms, read_tx, write_tx};
+use super::{BuildingRef, building_id, group_readings, now_ms, query_all, read_tx, write_tx};
 use crate::building::{BuildingFile, EdgeSpec, FORMAT, Fingerprint, FloorSpec, VertexSpec};
 use crate::gp::Kernel;
 use crate::{Building, Error, Result};
@@ -322,11 +322,7 @@ fn info_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<BuildingInfo> {
 /// All buildings (or the one with id `only`), by name; one statement, one snapshot.
 pub(super) fn list(conn: &Connection, only: Option<i64>) -> Result<Vec<BuildingInfo>> {
     let sql = format!("{INFO_SQL} WHERE ?1 IS NULL OR b.id = ?1 ORDER BY b.name");
-    let mut st = conn.prepare(&sql)?;
-    let out = st
-        .query_map([only], info_row)?
-        .collect::<rusqlite::Result<Vec<_>>>()?;
-    Ok(out)
+    query_all(conn, &sql, [only], info_row)
 }
 
 pub(super) fn info(conn: &Connection, building: BuildingRef<'_>) -> Result<BuildingInfo> {
@@ -355,20 +351,22 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
             [id],
             |r| r.try_into(),
         )?;
-        let floors = conn
-            .prepare("SELECT floor, name FROM floors WHERE building_id = ?1 ORDER BY ord")?
-            .query_map([id], |r| {
+        let floors = query_all(
+            conn,
+            "SELECT floor, name FROM floors WHERE building_id = ?1 ORDER BY ord",
+            [id],
+            |r| {
                 Ok(FloorSpec {
                     id: r.get(0)?,
                     name: r.get(1)?,
                 })
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
-        let vertices = conn
-            .prepare(
-                "SELECT vid, x, y, floor, label FROM vertices WHERE building_id = ?1 ORDER BY ord",
-            )?
-            .query_map([id], |r| {
+            },
+        )?;
+        let vertices = query_all(
+            conn,
+            "SELECT vid, x, y, floor, label FROM vertices WHERE building_id = ?1 ORDER BY ord",
+            [id],
+            |r| {
                 Ok(VertexSpec {
                     id: r.get(0)?,
                     x: r.get(1)?,
@@ -376,18 +374,20 @@ pub(super) fn get(conn: &Connection, building: BuildingRef<'_>, db: &str) -> Res
                     floor: r.get(3)?,
                     label: r.get(4)?,
                 })
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
-        let edges = conn
-            .prepare("SELECT a, b, length FROM edges WHERE building_id = ?1 ORDER BY ord")?
-            .query_map([id], |r| {
+            },
+        )?;
+        let edges = query_all(
+            conn,
+            "SELECT a, b, length FROM edges WHERE building_id = ?1 ORDER BY ord",
+            [id],
+            |r| {
                 Ok(EdgeSpec {
                     a: r.get(0)?,
                     b: r.get(1)?,
                     length: r.get(2)?,
                 })
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
+            },
+        )?;
         if vertices.len() as i64 != vertex_count || edges.len() as i64 != edge_count {
             return Err(Error::Database {
                 path: db.to_string(),

@@ -528,12 +528,11 @@ fn geometry_difference(local: &Building, theirs: &Building) -> Option<String> {
             floors(theirs)
         ));
     }
-    if local.vertices.len() != theirs.vertices.len() {
-        return Some(format!(
-            "{} vertices here, {} in the bundle",
-            local.vertices.len(),
-            theirs.vertices.len()
-        ));
+    let count = |what: &str, here: usize, there: usize| {
+        (here != there).then(|| format!("{here} {what} here, {there} in the bundle"))
+    };
+    if let Some(d) = count("vertices", local.vertices.len(), theirs.vertices.len()) {
+        return Some(d);
     }
     for v in &theirs.vertices {
         let Some(i) = local.vertex_index(&v.id) else {
@@ -547,12 +546,8 @@ fn geometry_difference(local: &Building, theirs: &Building) -> Option<String> {
             ));
         }
     }
-    if local.edges.len() != theirs.edges.len() {
-        return Some(format!(
-            "{} edges here, {} in the bundle",
-            local.edges.len(),
-            theirs.edges.len()
-        ));
+    if let Some(d) = count("edges", local.edges.len(), theirs.edges.len()) {
+        return Some(d);
     }
     for e in &theirs.edges {
         let (a, b) = (&theirs.vertices[e.a].id, &theirs.vertices[e.b].id);

@@ -3,7 +3,7 @@
 use rusqlite::{Connection, OptionalExtension, TransactionBehavior, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, read_tx};
+use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, query_all, read_tx};
 use crate::gp::Kernel;
 use crate::{Error, Result};
 
@@ -102,13 +102,13 @@ pub(super) fn latest(conn: &Connection, building: BuildingRef<'_>) -> Result<Opt
         let Some((id, fitted_ms, sf2, ell, sn2, log_likelihood)) = row else {
             return Ok(None);
         };
-        let aps_used = conn
-            .prepare(
-                "SELECT a.name FROM fit_access_points f JOIN access_points a ON a.id = f.ap_id
+        let aps_used = query_all(
+            conn,
+            "SELECT a.name FROM fit_access_points f JOIN access_points a ON a.id = f.ap_id
                  WHERE f.fit_id = ?1 ORDER BY f.ord",
-            )?
-            .query_map([id], |r| r.get(0))?
-            .collect::<rusqlite::Result<Vec<String>>>()?;
+            [id],
+            |r| r.get(0),
+        )?;
         Ok(Some(StoredFit {
             id,
             building_id: bid,

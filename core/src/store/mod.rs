@@ -522,6 +522,21 @@ fn group_readings<T>(
     Ok(out)
 }
 
+/// Every row of one query, each made by `row`: the store's one way to read a list (the
+/// statement is cached, as the same lists are read again and again).
+fn query_all<T>(
+    conn: &Connection,
+    sql: &str,
+    params: impl rusqlite::Params,
+    row: impl FnMut(&rusqlite::Row<'_>) -> rusqlite::Result<T>,
+) -> Result<Vec<T>> {
+    let mut st = conn.prepare_cached(sql)?;
+    let out = st
+        .query_map(params, row)?
+        .collect::<rusqlite::Result<Vec<T>>>()?;
+    Ok(out)
+}
+
 /// Runs `f` in a read transaction: all its statements see one committed snapshot, even
 /// while another connection writes (WAL). Without it, a delete landing between two SELECTs
 /// could pair one building's row with another's vertices.

@@ -3,7 +3,7 @@
 use rusqlite::{Connection, OptionalExtension, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, building_id, read_tx, write_tx};
+use super::{BuildingRef, building_id, query_all, read_tx, write_tx};
 use crate::gp::Kernel;
 use crate::plan::PlanOrigin;
 use crate::surveyor::Surveyor;
@@ -189,10 +189,12 @@ fn plan_row(conn: &Connection, r: &rusqlite::Row<'_>) -> Result<StoredPlan> {
     let surveyor = serde_json::from_str::<Option<Surveyor>>(&surveyor_text)
         .ok()
         .flatten();
-    let walk = conn
-        .prepare_cached("SELECT vid FROM plan_steps WHERE plan_id = ?1 ORDER BY step")?
-        .query_map([id], |r| r.get(0))?
-        .collect::<rusqlite::Result<Vec<String>>>()?;
+    let walk = query_all(
+        conn,
+        "SELECT vid FROM plan_steps WHERE plan_id = ?1 ORDER BY step",
+        [id],
+        |r| r.get(0),
+    )?;
     Ok(StoredPlan {
         id,
         building_id: r.get(1)?,

@@ -7,7 +7,9 @@ use std::collections::BTreeMap;
 use rusqlite::{Connection, OptionalExtension, params};
 use serde::{Deserialize, Serialize};
 
-use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, group_readings, read_tx, write_tx};
+use super::{
+    BuildingRef, UPSERT_ACCESS_POINT, building_id, group_readings, query_all, read_tx, write_tx,
+};
 use crate::{Error, Result};
 
 /// A fingerprint collected during a session: the RSS heard and where the surveyor was
@@ -378,15 +380,13 @@ pub(super) fn events(
                 "session {session_id} is not in the database"
             )));
         }
-        let mut st = conn.prepare(
+        let rows = query_all(
+            conn,
             "SELECT seq, kind, at_ms, payload FROM session_events
              WHERE session_id = ?1 AND seq > ?2 ORDER BY seq",
+            params![session_id, after_seq],
+            |r| <(i64, String, i64, String)>::try_from(r),
         )?;
-        let rows = st
-            .query_map(params![session_id, after_seq], |r| {
-                <(i64, String, i64, String)>::try_from(r)
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
         let mut out = Vec::with_capacity(rows.len());
         for (seq, kind, at_ms, payload) in rows {
             let event = if kind == "scan" {
@@ -416,7 +416,8 @@ pub(super) fn events(
 pub(super) fn list(conn: &Connection, building: BuildingRef<'_>) -> Result<Vec<SessionInfo>> {
     read_tx(conn, |conn| {
         let bid = building_id(conn, building)?;
-        let mut st = conn.prepare(
+        let rows = query_all(
+            conn,
             "SELECT s.id, s.plan_id, s.created_ms, s.surveyor,
                     (SELECT coalesce(max(seq), 0) FROM session_events e WHERE e.session_id = s.id),
                     (SELECT kind FROM session_events e WHERE e.session_id = s.id
@@ -424,9 +425,8 @@ pub(super) fn list(conn: &Connection, building: BuildingRef<'_>) -> Result<Vec<S
                      ORDER BY seq DESC LIMIT 1),
                     (SELECT count(*) FROM collected_fingerprints c WHERE c.session_id = s.id)
              FROM survey_sessions s WHERE s.building_id = ?1 ORDER BY s.created_ms, s.id",
-        )?;
-        let rows = st
-            .query_map([bid], |r| {
+            [bid],
+            |r| {
                 <(
                     i64,
                     Option<i64>,
@@ -436,8 +436,8 @@ pub(super) fn list(conn: &Connection, building: BuildingRef<'_>) -> Result<Vec<S
                     Option<String>,
                     i64,
                 )>::try_from(r)
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
+            },
+        )?;
         rows.into_iter()
             .map(
                 |(id, plan_id, created_ms, surveyor, last_seq, last_kind, collected)| {
@@ -551,19 +551,18 @@ pub(super) fn provenance(
 ) -> Result<Vec<SessionProvenance>> {
     read_tx(conn, |conn| {
         let bid = building_id(conn, building)?;
-        let mut st = conn.prepare(
+        query_all(
+            conn,
             "SELECT id, surveyor_name, device FROM survey_sessions WHERE building_id = ?1
              ORDER BY id",
-        )?;
-        let rows = st
-            .query_map([bid], |r| {
+            [bid],
+            |r| {
                 Ok(SessionProvenance {
                     session_id: r.get(0)?,
                     surveyor_name: r.get(1)?,
                     device: r.get(2)?,
                 })
-            })?
-            .collect::<rusqlite::Result<Vec<_>>>()?;
-        Ok(rows)
+            },
+        )
     })
 }

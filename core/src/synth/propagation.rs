@@ -87,15 +87,13 @@ impl PropagationParams {
         if self.exponent.0 <= 0.0 {
             return bad("exponent", self.exponent.0, "must be positive");
         }
-        for (name, v) in [
+        if let Some((name, v)) = crate::error::first_negative([
             ("wall_loss_db", self.wall_loss_db),
             ("floor_loss_db", self.floor_loss_db),
             ("shadow_sigma_db", self.shadow_sigma_db),
             ("noise_sigma_db", self.noise_sigma_db),
-        ] {
-            if !v.is_finite() || v < 0.0 {
-                return bad(name, v, "must be finite and >= 0");
-            }
+        ]) {
+            return bad(name, v, "must be finite and >= 0");
         }
         for (name, v) in [
             ("floor_height_m", self.floor_height_m),

@@ -116,58 +116,10 @@ pub fn cholesky_upper<const FMA: bool>(a: &mut [f64], n: usize) -> Option<f64> {
                 *x *= inv;
             }
         }
-        // Trailing update of rows below the panel, kb rows of the panel at a time.
+        // Trailing update of the rows below the panel: a rank-kb update by its rows.
         let end = k0 + kb;
         let (panel, rest) = a.split_at_mut(end * n);
-        let mut i = end;
-        if kb == BLOCK {
-            let srcs_at = |j: usize| -> [&[f64]; BLOCK] {
-                let mut out: [&[f64]; BLOCK] = [&[]; BLOCK];
-                for (t, o) in out.iter_mut().enumerate() {
-                    *o = &panel[(k0 + t) * n + j..(k0 + t) * n + n];
-                }
-                out
-            };
-            while i + 4 <= n {
-                let mut c = [[0.0; BLOCK]; 4];
-                for (r, cr) in c.iter_mut().enumerate() {
-                    for (t, x) in cr.iter_mut().enumerate() {
-                        *x = panel[(k0 + t) * n + i + r];
-                    }
-                }
-                // The triangle in front of the common column range, row by row.
-                for r in 1..4 {
-                    let row = &mut rest[(i + r - end) * n + i + r..(i + r - end) * n + i + 3];
-                    let srcs = srcs_at(i + r);
-                    update_block::<FMA>(row, &c[r], &srcs);
-                }
-                {
-                    let row = &mut rest[(i - end) * n + i..(i - end) * n + i + 3];
-                    update_block::<FMA>(row, &c[0], &srcs_at(i));
-                }
-                let base = |r: usize| (i + r - end) * n;
-                let Ok(rows) = rest.get_disjoint_mut([
-                    base(0) + i + 3..base(0) + n,
-                    base(1) + i + 3..base(1) + n,
-                    base(2) + i + 3..base(2) + n,
-                    base(3) + i + 3..base(3) + n,
-                ]) else {
-                    break;
-                };
-                update_block4::<FMA>(rows, &c, &srcs_at(i + 3));
-                i += 4;
-            }
-        }
-        for i in i..n {
-            let mut coeffs = [0.0; BLOCK];
-            let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
-            for (t, k) in (k0..end).enumerate() {
-                coeffs[t] = panel[k * n + i];
-                srcs[t] = &panel[k * n + i..k * n + n];
-            }
-            let row = &mut rest[(i - end) * n + i..(i - end) * n + n];
-            update_block::<FMA>(row, &coeffs[..kb], &srcs[..kb]);
-        }
+        rank_update_upper::<FMA>(rest, &panel[k0 * n..], n, end, n - end, kb);
         k0 = end;
     }
     Some(logdet)
@@ -242,48 +194,69 @@ pub fn syrk_upper_sub<const FMA: bool>(s: &mut [f64], n: usize, r: &[f64], rows:
     let mut i0 = 0;
     while i0 < rows {
         let ib = BLOCK.min(rows - i0);
-        let mut a0 = 0;
-        if ib == BLOCK {
-            let srcs_at = |col: usize| -> [&[f64]; BLOCK] {
-                let mut out: [&[f64]; BLOCK] = [&[]; BLOCK];
-                for (t, o) in out.iter_mut().enumerate() {
-                    *o = &r[(i0 + t) * n + col..(i0 + t) * n + n];
-                }
-                out
-            };
-            while a0 + 4 <= n {
-                let mut c = [[0.0; BLOCK]; 4];
-                for (q, cq) in c.iter_mut().enumerate() {
-                    for (t, x) in cq.iter_mut().enumerate() {
-                        *x = r[(i0 + t) * n + a0 + q];
-                    }
-                }
-                for q in 0..3 {
-                    let row = &mut s[(a0 + q) * n + a0 + q..(a0 + q) * n + a0 + 3];
-                    update_block::<FMA>(row, &c[q], &srcs_at(a0 + q));
-                }
-                let Ok(dst) = s.get_disjoint_mut([
-                    a0 * n + a0 + 3..a0 * n + n,
-                    (a0 + 1) * n + a0 + 3..(a0 + 1) * n + n,
-                    (a0 + 2) * n + a0 + 3..(a0 + 2) * n + n,
-                    (a0 + 3) * n + a0 + 3..(a0 + 3) * n + n,
-                ]) else {
-                    break;
-                };
-                update_block4::<FMA>(dst, &c, &srcs_at(a0 + 3));
-                a0 += 4;
-            }
-        }
-        for a in a0..n {
-            let mut coeffs = [0.0; BLOCK];
-            let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
-            for (t, i) in (i0..i0 + ib).enumerate() {
-                coeffs[t] = r[i * n + a];
-                srcs[t] = &r[i * n + a..i * n + n];
-            }
-            update_block::<FMA>(&mut s[a * n + a..a * n + n], &coeffs[..ib], &srcs[..ib]);
-        }
+        rank_update_upper::<FMA>(s, &r[i0 * n..], n, 0, n, ib);
         i0 += ib;
+    }
+}
+
+/// `T -= R^T R` on the upper triangle of an `m x m` block `T`, for `kb <= BLOCK` rows `R`
+/// of width `m`: the one rank-`kb` update behind both the Cholesky's trailing update (`R`
+/// the panel's rows, `T` the rows below it) and [`syrk_upper_sub`]. Both are row-major with
+/// leading dimension `ld` and start at column `col0`: `T(a, b)` is `t[a * ld + col0 + b]`
+/// and `R(q, b)` is `r[q * ld + col0 + b]`. With a full block, four rows of `T` at a time
+/// share each load of `R` ([`update_block4`]), after the small triangle in front of their
+/// common column range.
+#[inline(always)]
+fn rank_update_upper<const FMA: bool>(
+    t: &mut [f64],
+    r: &[f64],
+    ld: usize,
+    col0: usize,
+    m: usize,
+    kb: usize,
+) {
+    let ti = |a: usize| a * ld + col0;
+    let ri = |q: usize| q * ld + col0;
+    let mut a0 = 0;
+    if kb == BLOCK {
+        let srcs_at = |b: usize| -> [&[f64]; BLOCK] {
+            let mut out: [&[f64]; BLOCK] = [&[]; BLOCK];
+            for (q, o) in out.iter_mut().enumerate() {
+                *o = &r[ri(q) + b..ri(q) + m];
+            }
+            out
+        };
+        while a0 + 4 <= m {
+            let mut c = [[0.0; BLOCK]; 4];
+            for (k, ck) in c.iter_mut().enumerate() {
+                for (q, x) in ck.iter_mut().enumerate() {
+                    *x = r[ri(q) + a0 + k];
+                }
+            }
+            for k in 0..3 {
+                let row = &mut t[ti(a0 + k) + a0 + k..ti(a0 + k) + a0 + 3];
+                update_block::<FMA>(row, &c[k], &srcs_at(a0 + k));
+            }
+            let Ok(rows) = t.get_disjoint_mut([
+                ti(a0) + a0 + 3..ti(a0) + m,
+                ti(a0 + 1) + a0 + 3..ti(a0 + 1) + m,
+                ti(a0 + 2) + a0 + 3..ti(a0 + 2) + m,
+                ti(a0 + 3) + a0 + 3..ti(a0 + 3) + m,
+            ]) else {
+                break;
+            };
+            update_block4::<FMA>(rows, &c, &srcs_at(a0 + 3));
+            a0 += 4;
+        }
+    }
+    for a in a0..m {
+        let mut coeffs = [0.0; BLOCK];
+        let mut srcs: [&[f64]; BLOCK] = [&[]; BLOCK];
+        for q in 0..kb {
+            coeffs[q] = r[ri(q) + a];
+            srcs[q] = &r[ri(q) + a..ri(q) + m];
+        }
+        update_block::<FMA>(&mut t[ti(a) + a..ti(a) + m], &coeffs[..kb], &srcs[..kb]);
     }
 }
 

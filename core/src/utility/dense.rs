@@ -611,15 +611,23 @@ pub(crate) mod tests {
             for from in froms {
                 let (mut a, m, layout) = spd(n);
                 let got = factor(isa, &mut a, layout, from).expect("pd");
-                let want = schur_logdet(&m, from);
-                assert!(
-                    (got - want).abs() <= 1e-10 * want.abs().max(1.0),
-                    "{isa:?} n={n} from={from}: {got} vs {want}"
+                assert_logdet(
+                    got,
+                    schur_logdet(&m, from),
+                    &format!("{isa:?} n={n} from={from}"),
                 );
                 // The factor itself matches nalgebra's L^T.
                 assert_factor(&a, layout, &m, &format!("{isa:?} n={n}"));
             }
         }
+    }
+
+    /// A log-determinant within `1e-10` relative of the reference.
+    fn assert_logdet(got: f64, want: f64, what: &str) {
+        assert!(
+            (got - want).abs() <= 1e-10 * want.abs().max(1.0),
+            "{what}: {got} vs {want}"
+        );
     }
 
     /// [`factor_after`] with the leading block already factored gives the factor and the
@@ -634,10 +642,10 @@ pub(crate) mod tests {
                 a[row + i..row + known].copy_from_slice(&whole[row + i..row + known]);
             }
             let got = factor_after(isa, &mut a, layout, known, known).expect("pd");
-            let want = schur_logdet(&m, known);
-            assert!(
-                (got - want).abs() <= 1e-10 * want.abs().max(1.0),
-                "{isa:?} n={n} known={known}: {got} vs {want}"
+            assert_logdet(
+                got,
+                schur_logdet(&m, known),
+                &format!("{isa:?} n={n} known={known}"),
             );
             assert_factor(&a, layout, &m, &format!("{isa:?} n={n} known={known}"));
         }

@@ -52,6 +52,17 @@ fn bad(m: String) -> Error {
     Error::InvalidRequest(m)
 }
 
+/// A comma-separated list of numbers; `what` starts the message naming the one that is not.
+fn numbers<T: std::str::FromStr>(list: &str, what: &str) -> Result<Vec<T>> {
+    list.split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<T>()
+                .map_err(|_| bad(format!("{what} {x:?} is not a number")))
+        })
+        .collect()
+}
+
 fn parse_case(s: &str) -> Result<BenchCase> {
     let parts: Vec<&str> = s.split(':').collect();
     if parts.len() != 4 && parts.len() != 5 {
@@ -60,14 +71,7 @@ fn parse_case(s: &str) -> Result<BenchCase> {
         )));
     }
     let building = Arc::new(Building::load(&PathBuf::from(parts[0]))?);
-    let budgets = parts[3]
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<f64>()
-                .map_err(|_| bad(format!("--case {s:?}: budget {x:?} is not a number")))
-        })
-        .collect::<Result<Vec<f64>>>()?;
+    let budgets = numbers(parts[3], &format!("--case {s:?}: budget"))?;
     let kernel = match parts.get(4) {
         Some(k) => parse_kernel(k).map_err(bad)?,
         None => match building.kernel {
@@ -102,15 +106,7 @@ pub fn run(a: Args) -> Result<()> {
         .split(',')
         .map(|x| Algorithm::from_name(x.trim()))
         .collect::<Result<Vec<_>>>()?;
-    let seeds = a
-        .seeds
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<u64>()
-                .map_err(|_| bad(format!("--seeds: {x:?} is not a number")))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let seeds = numbers(&a.seeds, "--seeds:")?;
     let mut time_limits = BTreeMap::new();
     for t in &a.time_limits {
         let (name, secs) = t

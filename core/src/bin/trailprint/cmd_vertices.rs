@@ -6,7 +6,7 @@ use std::path::Path;
 use trailprint::Result;
 
 use crate::opts::json_line;
-use crate::store_cli::{column_width, load_building, printable};
+use crate::store_cli::{column_width, label_cell, load_building, printable};
 use crate::walk_text::floor_name;
 
 #[derive(clap::Args)]
@@ -87,13 +87,7 @@ pub fn run(a: &Args, db: Option<&Path>) -> Result<()> {
         "id", "label", "floor", "x_m", "y_m"
     );
     for r in &rows {
-        let label: String = r
-            .label
-            .as_deref()
-            .map_or_else(|| "-".into(), printable)
-            .chars()
-            .take(lw)
-            .collect();
+        let label = label_cell(r.label.as_deref(), lw);
         println!(
             "{:<idw$}  {:<lw$}  {:<fw$}  {:>9.2} {:>9.2}  {}",
             printable(&r.id),

@@ -231,6 +231,15 @@ pub fn printable(name: &str) -> String {
         .replace("\\'", "'")
 }
 
+/// A vertex label as a table cell: [`printable`], `-` for none, cut to `width` characters.
+pub fn label_cell(label: Option<&str>, width: usize) -> String {
+    label
+        .map_or_else(|| "-".into(), printable)
+        .chars()
+        .take(width)
+        .collect()
+}
+
 /// The width of a table column: its widest cell in characters, at least `min` (the
 /// header's width).
 pub fn column_width<S: AsRef<str>>(cells: impl IntoIterator<Item = S>, min: usize) -> usize {

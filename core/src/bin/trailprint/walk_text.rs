@@ -7,7 +7,7 @@ use trailprint::samples::{Surveyor, check_in_flags};
 use trailprint::session::tracker::{classify_turn, guidance_sentence};
 use trailprint::session::types::Turn;
 
-use crate::store_cli::{column_width, printable};
+use crate::store_cli::{column_width, label_cell, printable};
 
 /// The name a person uses for a floor: its name, else "floor N".
 pub fn floor_name(b: &Building, floor: i64) -> String {
@@ -78,13 +78,7 @@ pub fn steps_table(b: &Building, walk: &[usize], model: &Surveyor) -> Vec<String
     )];
     for (i, &v) in walk.iter().enumerate() {
         let vx = &b.vertices[v];
-        let label: String = vx
-            .label
-            .as_deref()
-            .map_or_else(|| "-".to_string(), printable)
-            .chars()
-            .take(label_w)
-            .collect();
+        let label = label_cell(vx.label.as_deref(), label_w);
         let floor = if floors {
             format!("{:<12}", floor_name(b, vx.pos.floor))
         } else {
