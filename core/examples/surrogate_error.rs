@@ -45,6 +45,22 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
+/// The value `f` gives each walk, and the mean time it took per walk in milliseconds.
+fn timed_values(
+    walks: &[Vec<usize>],
+    f: impl Fn(&[usize]) -> trailprint::Result<f64>,
+) -> trailprint::Result<(Vec<f64>, f64)> {
+    let t0 = Instant::now();
+    let values = walks
+        .iter()
+        .map(|w| f(w.as_slice()))
+        .collect::<trailprint::Result<_>>()?;
+    Ok((
+        values,
+        t0.elapsed().as_secs_f64() * 1e3 / walks.len() as f64,
+    ))
+}
+
 fn main() -> trailprint::Result<()> {
     let human = std::env::args().any(|a| a == "human");
     let model = if human {
@@ -94,18 +110,8 @@ fn main() -> trailprint::Result<()> {
                     leg(&p, &spec, &[], Some(&mut rng), &run)
                 })
                 .collect();
-            let t0 = Instant::now();
-            let s: Vec<f64> = walks
-                .iter()
-                .map(|w| sur.value(w))
-                .collect::<Result<_, _>>()?;
-            let ts = t0.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
-            let t1 = Instant::now();
-            let e: Vec<f64> = walks
-                .iter()
-                .map(|w| p.utility(w))
-                .collect::<Result<_, _>>()?;
-            let te = t1.elapsed().as_secs_f64() * 1e3 / walks.len() as f64;
+            let (s, ts) = timed_values(&walks, |w| sur.value(w))?;
+            let (e, te) = timed_values(&walks, |w| p.utility(w))?;
             let rho = pearson(&ranks(&s), &ranks(&e));
             let (mut conc, mut pairs, mut conc2, mut pairs2) = (0usize, 0usize, 0usize, 0usize);
             for i in 0..walks.len() {

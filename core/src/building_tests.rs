@@ -15,6 +15,17 @@ fn base() -> serde_json::Value {
     })
 }
 
+/// [`base`], as `edit` changes it.
+fn with(edit: impl FnOnce(&mut serde_json::Value)) -> serde_json::Value {
+    let mut v = base();
+    edit(&mut v);
+    v
+}
+
+fn base_building() -> Building {
+    Building::from_json(&base().to_string(), "t.json").expect("valid")
+}
+
 fn err_of(v: serde_json::Value) -> String {
     match Building::from_json(&v.to_string(), "t.json") {
         Ok(_) => panic!("expected an error for {v}"),
@@ -22,9 +33,15 @@ fn err_of(v: serde_json::Value) -> String {
     }
 }
 
+/// Checks that [`base`], as `edit` changes it, is refused with a message containing `want`.
+fn assert_refused(edit: impl FnOnce(&mut serde_json::Value), want: &str) {
+    let e = err_of(with(edit));
+    assert!(e.contains(want), "expected {want:?} in: {e}");
+}
+
 #[test]
 fn valid_building_loads_with_lengths_and_adjacency() {
-    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    let b = base_building();
     assert_eq!(b.len(), 3);
     assert!((b.edges[0].length - 5.0).abs() < 1e-12, "Euclidean default");
     assert_eq!(b.edges[1].length, 4.5);
@@ -37,7 +54,7 @@ fn valid_building_loads_with_lengths_and_adjacency() {
 
 #[test]
 fn export_then_import_gives_the_same_building() {
-    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    let b = base_building();
     let text = b.to_file().to_json();
     let b2 = Building::from_json(&text, "again").expect("valid");
     assert_eq!(b.to_file(), b2.to_file());
@@ -45,44 +62,33 @@ fn export_then_import_gives_the_same_building() {
 
 #[test]
 fn unknown_format_version() {
-    let mut v = base();
-    v["format"] = "survey-building/2".into();
-    let e = err_of(v);
-    assert!(
-        e.contains("t.json: format: unknown format version \"survey-building/2\""),
-        "{e}"
+    assert_refused(
+        |v| v["format"] = "survey-building/2".into(),
+        "t.json: format: unknown format version \"survey-building/2\"",
     );
 }
 
 #[test]
 fn unknown_vertex_in_edge() {
-    let mut v = base();
-    v["edges"][1]["b"] = "zz".into();
-    let e = err_of(v);
-    assert!(e.contains("edges[1].b: unknown vertex \"zz\""), "{e}");
+    assert_refused(
+        |v| v["edges"][1]["b"] = "zz".into(),
+        "edges[1].b: unknown vertex \"zz\"",
+    );
 }
 
 #[test]
 fn duplicate_vertex_id() {
-    let mut v = base();
-    v["vertices"][2]["id"] = "a".into();
-    let e = err_of(v);
-    assert!(
-        e.contains("vertices[2].id: duplicate vertex id \"a\" (first at vertices[0])"),
-        "{e}"
+    assert_refused(
+        |v| v["vertices"][2]["id"] = "a".into(),
+        "vertices[2].id: duplicate vertex id \"a\" (first at vertices[0])",
     );
 }
 
 #[test]
 fn duplicate_position_on_a_floor() {
-    let mut v = base();
-    v["vertices"][2]["x"] = 0.0.into();
-    let e = err_of(v);
-    assert!(
-        e.contains(
-            "duplicate position: vertex \"c\" and vertex \"a\" are both at (0, 0) on floor 0"
-        ),
-        "{e}"
+    assert_refused(
+        |v| v["vertices"][2]["x"] = 0.0.into(),
+        "duplicate position: vertex \"c\" and vertex \"a\" are both at (0, 0) on floor 0",
     );
 }
 
@@ -106,71 +112,64 @@ fn same_position_on_two_floors_is_fine_but_needs_explicit_length() {
 
 #[test]
 fn vertex_on_unknown_floor() {
-    let mut v = base();
-    v["vertices"][1]["floor"] = 3.into();
-    let e = err_of(v);
-    assert!(
-        e.contains("vertices[1].floor: vertex \"b\" is on floor 3, which is not in `floors`"),
-        "{e}"
+    assert_refused(
+        |v| v["vertices"][1]["floor"] = 3.into(),
+        "vertices[1].floor: vertex \"b\" is on floor 3, which is not in `floors`",
     );
 }
 
 #[test]
 fn negative_and_tiny_lengths() {
-    let mut v = base();
-    v["edges"][1]["length"] = (-1.0).into();
-    let e = err_of(v);
-    assert!(
-        e.contains(
-            "edges[1].length: edge \"b\"-\"c\": length must be a finite non-negative number, got -1"
-        ),
-        "{e}"
+    assert_refused(
+        |v| v["edges"][1]["length"] = (-1.0).into(),
+        "edges[1].length: edge \"b\"-\"c\": length must be a finite non-negative number, got -1",
     );
-    let mut v = base();
-    v["edges"][1]["length"] = 1e-7.into();
-    let e = err_of(v);
-    assert!(e.contains("is shorter than 0.000001 m"), "{e}");
+    assert_refused(
+        |v| v["edges"][1]["length"] = 1e-7.into(),
+        "is shorter than 0.000001 m",
+    );
 }
 
 #[test]
 fn length_shorter_than_straight_line() {
-    let mut v = base();
-    v["edges"][1]["length"] = 3.9.into();
-    let e = err_of(v);
-    assert!(e.contains("edges[1].length: edge \"b\"-\"c\": length 3.9 m is shorter than the straight-line distance 4.000000 m"), "{e}");
+    assert_refused(
+        |v| v["edges"][1]["length"] = 3.9.into(),
+        "edges[1].length: edge \"b\"-\"c\": length 3.9 m is shorter than the straight-line distance 4.000000 m",
+    );
 }
 
 #[test]
 fn self_loop() {
-    let mut v = base();
-    v["edges"][0]["b"] = "a".into();
-    let e = err_of(v);
-    assert!(e.contains("edges[0]: self-loop at vertex \"a\""), "{e}");
+    assert_refused(
+        |v| v["edges"][0]["b"] = "a".into(),
+        "edges[0]: self-loop at vertex \"a\"",
+    );
 }
 
 #[test]
 fn same_pair_twice() {
-    let mut v = base();
-    v["edges"]
-        .as_array_mut()
-        .expect("array")
-        .push(serde_json::json!({"a": "b", "b": "a"}));
-    let e = err_of(v);
-    assert!(
-        e.contains("edges[2]: vertices \"b\" and \"a\" are already joined by edges[0]"),
-        "{e}"
+    assert_refused(
+        |v| {
+            v["edges"]
+                .as_array_mut()
+                .expect("array")
+                .push(serde_json::json!({"a": "b", "b": "a"}));
+        },
+        "edges[2]: vertices \"b\" and \"a\" are already joined by edges[0]",
     );
 }
 
 #[test]
 fn disconnected_graph_names_components() {
-    let mut v = base();
-    v["vertices"]
-        .as_array_mut()
-        .expect("array")
-        .push(serde_json::json!({"id": "d", "x": 9.0, "y": 9.0}));
-    let e = err_of(v);
-    assert!(e.contains("the graph is disconnected: 2 components (3 vertices including \"a\"; 1 vertices including \"d\")"), "{e}");
+    assert_refused(
+        |v| {
+            v["vertices"]
+                .as_array_mut()
+                .expect("array")
+                .push(serde_json::json!({"id": "d", "x": 9.0, "y": 9.0}));
+        },
+        "the graph is disconnected: 2 components (3 vertices including \"a\"; 1 vertices including \"d\")",
+    );
 }
 
 #[test]
@@ -179,19 +178,13 @@ fn non_finite_numbers_are_rejected() {
     let text = base().to_string().replace("\"x\":3.0", "\"x\":1e999");
     let e = Building::from_json(&text, "t.json").expect_err("overflow");
     assert!(e.to_string().contains("t.json: vertices[1].x"), "{e}");
-    let mut v = base();
-    v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": 5.0e3}}]);
-    let e = err_of(v);
-    assert!(
-        e.contains("pilot[0].rss.ap: RSS must be a finite dBm value in [-120, 0], got 5000"),
-        "{e}"
+    assert_refused(
+        |v| v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": 5.0e3}}]),
+        "pilot[0].rss.ap: RSS must be a finite dBm value in [-120, 0], got 5000",
     );
-    let mut v = base();
-    v["kernel"] = serde_json::json!({"sf2": 1.0, "ell": -2.0, "sn2": 1.0});
-    let e = err_of(v);
-    assert!(
-        e.contains("kernel.ell: must be a finite positive number, got -2"),
-        "{e}"
+    assert_refused(
+        |v| v["kernel"] = serde_json::json!({"sf2": 1.0, "ell": -2.0, "sn2": 1.0}),
+        "kernel.ell: must be a finite positive number, got -2",
     );
 }
 
@@ -250,9 +243,7 @@ fn positional_arrays_are_refused_naming_the_path() {
         ("kernel", serde_json::json!([40.0, 6.0, 9.0]), "kernel"),
     ];
     for (field, value, path) in cases {
-        let mut v = base();
-        v[field] = value;
-        let e = err_of(v);
+        let e = err_of(with(|v| v[field] = value));
         assert!(
             e.starts_with(&format!(
                 "t.json: {path}: invalid type: sequence, expected a JSON object"
@@ -272,31 +263,29 @@ fn positional_arrays_are_refused_naming_the_path() {
 
 #[test]
 fn nulls_are_refused_naming_the_path() {
-    let mut cases: Vec<(serde_json::Value, &str)> = Vec::new();
-    let mut v = base();
-    v["floors"] = serde_json::Value::Null;
-    cases.push((v, "floors"));
-    let mut v = base();
-    v["vertices"][2]["label"] = serde_json::Value::Null;
-    cases.push((v, "vertices[2].label"));
-    let mut v = base();
-    v["edges"][1]["length"] = serde_json::Value::Null;
-    cases.push((v, "edges[1].length"));
-    let mut v = base();
-    v["floors"] = serde_json::json!([{"id": 0, "name": null}]);
-    cases.push((v, "floors[0].name"));
-    let mut v = base();
-    v["kernel"] = serde_json::Value::Null;
-    cases.push((v, "kernel"));
-    let mut v = base();
-    v["pilot"] = serde_json::Value::Null;
-    cases.push((v, "pilot"));
-    let mut v = base();
-    v["vertices"][0]["floor"] = serde_json::Value::Null;
-    cases.push((v, "vertices[0].floor"));
-    let mut v = base();
-    v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": null}]);
-    cases.push((v, "pilot[0].rss"));
+    use serde_json::Value::Null;
+    let cases = [
+        (with(|v| v["floors"] = Null), "floors"),
+        (
+            with(|v| v["vertices"][2]["label"] = Null),
+            "vertices[2].label",
+        ),
+        (with(|v| v["edges"][1]["length"] = Null), "edges[1].length"),
+        (
+            with(|v| v["floors"] = serde_json::json!([{"id": 0, "name": null}])),
+            "floors[0].name",
+        ),
+        (with(|v| v["kernel"] = Null), "kernel"),
+        (with(|v| v["pilot"] = Null), "pilot"),
+        (
+            with(|v| v["vertices"][0]["floor"] = Null),
+            "vertices[0].floor",
+        ),
+        (
+            with(|v| v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": null}])),
+            "pilot[0].rss",
+        ),
+    ];
     for (v, path) in cases {
         let e = err_of(v);
         assert!(
@@ -317,10 +306,8 @@ fn coordinates_and_lengths_are_bounded() {
     assert!(b.total_edge_length().is_finite());
 
     for (path, value) in [("vertices[1].x", 1e308), ("vertices[1].y", -1.000001e6)] {
-        let mut v = base();
         let axis = &path[path.len() - 1..];
-        v["vertices"][1][axis] = serde_json::json!(value);
-        let e = err_of(v);
+        let e = err_of(with(|v| v["vertices"][1][axis] = serde_json::json!(value)));
         assert!(
             e.contains(&format!(
                 "t.json: {path}: vertex \"b\": {axis} must be a finite number of metres with |{axis}| <= 1e6, got {value:e}"
@@ -328,32 +315,21 @@ fn coordinates_and_lengths_are_bounded() {
             "{e}"
         );
     }
-    let mut v = base();
-    v["test_points"] = serde_json::json!([{"x": 0.0, "y": 2e6}]);
-    let e = err_of(v);
-    assert!(
-        e.contains(
-            "t.json: test_points[0].y: must be a finite number of metres with |y| <= 1e6, got 2e6"
-        ),
-        "{e}"
+    assert_refused(
+        |v| v["test_points"] = serde_json::json!([{"x": 0.0, "y": 2e6}]),
+        "t.json: test_points[0].y: must be a finite number of metres with |y| <= 1e6, got 2e6",
     );
     // An explicit length may exceed the straight line, but not without bound.
-    let mut v = base();
-    v["edges"][1]["length"] = serde_json::json!(1e300);
-    let e = err_of(v);
-    assert!(
-        e.contains(
-            "t.json: edges[1].length: edge \"b\"-\"c\": length 1e300 m is longer than 1e7 m"
-        ),
-        "{e}"
+    assert_refused(
+        |v| v["edges"][1]["length"] = serde_json::json!(1e300),
+        "t.json: edges[1].length: edge \"b\"-\"c\": length 1e300 m is longer than 1e7 m",
     );
 }
 
 #[test]
 fn rss_is_between_minus_120_and_0_dbm() {
     for ok in [-120.0, -60.5, 0.0] {
-        let mut v = base();
-        v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": ok}}]);
+        let v = with(|v| v["pilot"] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap": ok}}]));
         Building::from_json(&v.to_string(), "t.json").expect("in range");
     }
     for (field, bad) in [
@@ -361,9 +337,9 @@ fn rss_is_between_minus_120_and_0_dbm() {
         ("test_points", -120.5),
         ("dense_survey", 0.01),
     ] {
-        let mut v = base();
-        v[field] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap-7": bad}}]);
-        let e = err_of(v);
+        let e = err_of(with(|v| {
+            v[field] = serde_json::json!([{"x": 0.0, "y": 1.0, "rss": {"ap-7": bad}}]);
+        }));
         assert!(
             e.contains(&format!(
                 "t.json: {field}[0].rss.ap-7: RSS must be a finite dBm value in [-120, 0], got {bad}"
@@ -391,7 +367,7 @@ fn wrong_types_name_the_json_path() {
 
 #[test]
 fn walks_are_resolved_and_checked() {
-    let b = Building::from_json(&base().to_string(), "t.json").expect("valid");
+    let b = base_building();
     assert_eq!(
         b.resolve_walk(&["a", "b", "c"]).expect("walk"),
         vec![0, 1, 2]

@@ -47,25 +47,37 @@ fn corridor(budget: &str) -> [&str; 6] {
     ["--start", "f0-c00", "--end", "f0-c15", "--budget", budget]
 }
 
+/// `COMMAND --building BUILDING` on the demo's [`corridor`] walk within `budget` metres,
+/// with `extra` arguments, expected to succeed: its output.
+fn on_corridor(db: &Path, command: &str, building: &str, budget: &str, extra: &[&str]) -> String {
+    run_ok(
+        db,
+        &[
+            &[command, "--building", building][..],
+            &corridor(budget),
+            extra,
+        ]
+        .concat(),
+    )
+}
+
 /// A human's simulated survey of the demo's corridor walk (40 m, 20% wrong turns, 0.3 s to
 /// plan), as `simulate --json` reports it: the session id, the samples collected.
 fn simulate_walk(db: &Path, building: &str) -> serde_json::Value {
-    let out = run_ok(
+    let out = on_corridor(
         db,
+        "simulate",
+        building,
+        "40",
         &[
-            &["simulate", "--building", building][..],
-            &corridor("40"),
-            &[
-                "--surveyor",
-                "human",
-                "--deviate",
-                "0.2",
-                "--time-limit",
-                "0.3",
-                "--json",
-            ],
-        ]
-        .concat(),
+            "--surveyor",
+            "human",
+            "--deviate",
+            "0.2",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
     );
     serde_json::from_str(out.lines().last().expect("json")).expect("simulate json")
 }
@@ -74,14 +86,12 @@ fn simulate_walk(db: &Path, building: &str) -> serde_json::Value {
 fn with_plan(db: &Path) -> (String, i64) {
     run_ok(db, &["import", DEMO]);
     let name = demo_name();
-    let out = run_ok(
+    let out = on_corridor(
         db,
-        &[
-            &["plan", "--building", &name][..],
-            &corridor("60"),
-            &["--model", "human", "--time-limit", "0.3", "--json"],
-        ]
-        .concat(),
+        "plan",
+        &name,
+        "60",
+        &["--model", "human", "--time-limit", "0.3", "--json"],
     );
     let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
     (name, v["plan_id"].as_i64().expect("plan_id"))
@@ -303,13 +313,8 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
 #[test]
 fn plan_is_printed_for_a_person() {
     let (_dir, db) = temp_db();
-    let args = [
-        &["plan", "--building", DEMO][..],
-        &corridor("70"),
-        &["--model", "human", "--time-limit", "0.3"],
-    ]
-    .concat();
-    let out = run_ok(&db, &args);
+    let person = ["--model", "human", "--time-limit", "0.3"];
+    let out = on_corridor(&db, "plan", DEMO, "70", &person);
     let walk: Vec<&str> = out
         .lines()
         .find_map(|l| l.strip_prefix("walk          "))
@@ -341,9 +346,13 @@ fn plan_is_printed_for_a_person() {
         }
     }
     // The sheet: the guidance sentences of a live session.
-    let mut with = args.to_vec();
-    with.push("--instructions");
-    let sheet = run_ok(&db, &with);
+    let sheet = on_corridor(
+        &db,
+        "plan",
+        DEMO,
+        "70",
+        &[&person[..], &["--instructions"]].concat(),
+    );
     let lines: Vec<&str> = sheet.lines().filter(|l| l.contains(". step ")).collect();
     assert!(!lines.is_empty(), "{sheet}");
     for l in &lines {
@@ -813,14 +822,12 @@ fn every_mark_on_a_map_has_its_legend_entry() {
 fn robot_time_fit_without_pilot_and_collected_csv_digits() {
     let (dir, db) = demo_db();
     let demo = demo_name();
-    let out = run_ok(
+    let out = on_corridor(
         &db,
-        &[
-            &["plan", "--building", demo.as_str()][..],
-            &corridor("40"),
-            &["--model", "robot", "--time-limit", "0.3"],
-        ]
-        .concat(),
+        "plan",
+        demo.as_str(),
+        "40",
+        &["--model", "robot", "--time-limit", "0.3"],
     );
     let length: f64 = out
         .lines()
@@ -838,21 +845,19 @@ fn robot_time_fit_without_pilot_and_collected_csv_digits() {
         "{out}"
     );
     assert!(!out.contains("1.2 m/s"), "{out}");
-    let fast = run_ok(
+    let fast = on_corridor(
         &db,
+        "plan",
+        demo.as_str(),
+        "40",
         &[
-            &["plan", "--building", demo.as_str()][..],
-            &corridor("40"),
-            &[
-                "--model",
-                "robot",
-                "--time-limit",
-                "0.3",
-                "--robot-speed",
-                "2",
-            ],
-        ]
-        .concat(),
+            "--model",
+            "robot",
+            "--time-limit",
+            "0.3",
+            "--robot-speed",
+            "2",
+        ],
     );
     assert!(fast.contains("at the robot's 2 m/s"), "{fast}");
 
@@ -871,23 +876,21 @@ fn robot_time_fit_without_pilot_and_collected_csv_digits() {
     );
 
     // The collected fingerprints of a walk with wrong turns (estimated positions).
-    run_ok(
+    on_corridor(
         &db,
+        "simulate",
+        demo.as_str(),
+        "40",
         &[
-            &["simulate", "--building", demo.as_str()][..],
-            &corridor("40"),
-            &[
-                "--surveyor",
-                "human",
-                "--deviate",
-                "0.3",
-                "--seed",
-                "3",
-                "--time-limit",
-                "0.3",
-            ],
-        ]
-        .concat(),
+            "--surveyor",
+            "human",
+            "--deviate",
+            "0.3",
+            "--seed",
+            "3",
+            "--time-limit",
+            "0.3",
+        ],
     );
     let csv = dir.path().join("c.csv");
     run_ok(

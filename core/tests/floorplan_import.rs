@@ -43,6 +43,20 @@ fn at(b: &Building, x: f64, y: f64) -> Coord<f64> {
     Coord { x, y }
 }
 
+/// The rectangle from `(x0, y0)` to `(x1, y1)` in fixture metres, in the building's frame
+/// (see [`at`]).
+fn rect_at(b: &Building, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> Polygon<f64> {
+    Polygon::new(
+        LineString::from(vec![
+            at(b, x0, y0),
+            at(b, x1, y0),
+            at(b, x1, y1),
+            at(b, x0, y1),
+        ]),
+        vec![],
+    )
+}
+
 fn walkable(b: &Building, floor: i64) -> Vec<Polygon<f64>> {
     b.outlines
         .iter()
@@ -268,15 +282,7 @@ fn mall_imdf_folder_and_zip() {
     assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     check_walkable(&b);
     // Nothing stands in, or walks through, the hall's pillar.
-    let pillar = Polygon::new(
-        LineString::from(vec![
-            at(&b, 19.0, 8.0),
-            at(&b, 21.0, 8.0),
-            at(&b, 21.0, 10.0),
-            at(&b, 19.0, 10.0),
-        ]),
-        vec![],
-    );
+    let pillar = rect_at(&b, (19.0, 8.0), (21.0, 10.0));
     for e in b
         .edges
         .iter()
@@ -294,15 +300,7 @@ fn mall_imdf_folder_and_zip() {
     let j = vertex_at(&b, 0, at(&b, 24.0, 6.0), "opening");
     assert!(joined_to(&b, j, "Kiosk") && joined_to(&b, j, "Hall"));
     // The structure unit is left out.
-    let structure = Polygon::new(
-        LineString::from(vec![
-            at(&b, 28.2, 0.2),
-            at(&b, 30.8, 0.2),
-            at(&b, 30.8, 2.8),
-            at(&b, 28.2, 2.8),
-        ]),
-        vec![],
-    );
+    let structure = rect_at(&b, (28.2, 0.2), (30.8, 2.8));
     assert!(
         !b.vertices
             .iter()

@@ -38,6 +38,16 @@ fn assert_names(msg: &str, parts: &[&str]) {
     }
 }
 
+/// Fails unless `result` is a refusal (`why`: what makes it one) naming every one of
+/// `parts`.
+fn assert_refused_naming<T: std::fmt::Debug>(
+    result: trailprint::Result<T>,
+    why: &str,
+    parts: &[&str],
+) {
+    assert_names(&result.expect_err(why).to_string(), parts);
+}
+
 /// Checks that the validator accepts the building an import wrote and that the counts the
 /// import reports are the building's.
 fn valid_import(imp: &trailprint::floorplan::FloorplanImport, name: &str) {
@@ -54,12 +64,9 @@ fn valid_import(imp: &trailprint::floorplan::FloorplanImport, name: &str) {
 /// on it was still running after 60 s). It is refused at once, naming the room and its size.
 #[test]
 fn a_room_kilometres_across_is_refused_before_its_grid_is_laid() {
-    let input = text("osm-room-half-a-degree.geojson");
-    let err = replay_osm_as(&input, "room.geojson", 30)
-        .expect_err("a 37 km room is not an indoor floor plan");
-    let msg = err.to_string();
-    assert_names(
-        &msg,
+    assert_refused_naming(
+        replay_osm_as(&text("osm-room-half-a-degree.geojson"), "room.geojson", 30),
+        "a 37 km room is not an indoor floor plan",
         &[
             "room.geojson",
             "grid cells",
@@ -97,21 +104,21 @@ fn a_reading_of_minus_zero_dbm_replays_to_the_same_session() {
     }
 }
 
-/// A session on the fuzz building (`session-building.json`, the building of the `session`
-/// target) with the walk `a b c d`, its log in memory or in an in-memory store (kept, so
-/// that a test can read its rows).
-fn fuzz_session(
+/// A session log in memory or in an in-memory store (kept, so that a test can read its
+/// rows) holding the fuzz building (`session-building.json`, the building of the `session`
+/// target) and a plan of `walk` on it (the plan's id), as the `session` target sets up.
+fn fuzz_log_with_plan(
     in_store: bool,
-    surveyor: trailprint::session::Surveyor,
+    walk: &[&str],
 ) -> (
-    trailprint::session::Session,
     std::sync::Arc<dyn trailprint::session::SessionLog>,
+    i64,
     Option<std::sync::Arc<trailprint::store::Store>>,
 ) {
     use std::sync::Arc;
     use trailprint::Building;
     use trailprint::gp::Kernel;
-    use trailprint::session::{MemoryLog, PlanData, Session, SessionLog, SessionOptions};
+    use trailprint::session::{MemoryLog, PlanData, SessionLog};
     use trailprint::store::{ImportOptions as StoreImport, Store};
 
     let building =
@@ -128,14 +135,24 @@ fn fuzz_session(
         let id = log.add_building(Arc::new(building));
         (log, id, None)
     };
-    let plan = PlanData::for_walk(
-        bid,
-        &["a", "b", "c", "d"],
-        40.0,
-        Kernel::new(20.0, 5.0, 2.0),
-        12.0,
-    );
+    let plan = PlanData::for_walk(bid, walk, 40.0, Kernel::new(20.0, 5.0, 2.0), 12.0);
     let plan_id = log.save_plan(&plan).unwrap();
+    (log, plan_id, store)
+}
+
+/// A session on the fuzz building with the walk `a b c d` and no automatic replans (see
+/// [`fuzz_log_with_plan`]).
+fn fuzz_session(
+    in_store: bool,
+    surveyor: trailprint::session::Surveyor,
+) -> (
+    trailprint::session::Session,
+    std::sync::Arc<dyn trailprint::session::SessionLog>,
+    Option<std::sync::Arc<trailprint::store::Store>>,
+) {
+    use trailprint::session::{Session, SessionOptions};
+
+    let (log, plan_id, store) = fuzz_log_with_plan(in_store, &["a", "b", "c", "d"]);
     let options = SessionOptions {
         auto_replan: false,
         ..SessionOptions::default()
@@ -215,12 +232,9 @@ fn the_store_refuses_event_times_past_max_event_t_ms() {
         .append_event(id, MAX_EVENT_T_MS, &SessionEvent::Pause)
         .unwrap();
     for t in [i64::MIN, -1, MAX_EVENT_T_MS + 1, i64::MAX] {
-        let err = store
-            .append_event(id, t, &SessionEvent::Resume)
-            .expect_err(&format!("at_ms {t} accepted"));
-        let msg = err.to_string();
-        assert_names(
-            &msg,
+        assert_refused_naming(
+            store.append_event(id, t, &SessionEvent::Resume),
+            &format!("at_ms {t} accepted"),
             &["at_ms", &MAX_EVENT_T_MS.to_string(), &t.to_string()],
         );
     }
@@ -234,13 +248,7 @@ fn the_store_refuses_event_times_past_max_event_t_ms() {
 /// changes neither the session nor its log (nor the store's rows), an accepted one gets the
 /// next seq and leaves finite figures, and the log replays to the live state.
 fn replay_session_fixture(name: &str) {
-    use std::sync::Arc;
-    use trailprint::Building;
-    use trailprint::gp::Kernel;
-    use trailprint::session::{
-        Event, MemoryLog, PlanData, Session, SessionLog, SessionOptions, SessionStatus, Surveyor,
-    };
-    use trailprint::store::{ImportOptions as StoreImport, Store};
+    use trailprint::session::{Event, Session, SessionOptions, SessionStatus, Surveyor};
 
     #[derive(serde::Deserialize)]
     #[serde(untagged)]
@@ -258,28 +266,13 @@ fn replay_session_fixture(name: &str) {
         ops: Vec<Op>,
     }
     let input: Input = serde_json::from_str(&text(name)).expect(name);
-    let building =
-        Building::from_json(&text("session-building.json"), "session-building.json").unwrap();
-    let (log, bid): (Arc<dyn SessionLog>, i64) = if input.log == "store" {
-        let store = Store::open_in_memory().unwrap();
-        let id = store
-            .import_building(&building, None, &StoreImport::default())
-            .unwrap()
-            .id;
-        (Arc::new(store), id)
-    } else {
-        let log = Arc::new(MemoryLog::new());
-        let id = log.add_building(Arc::new(building));
-        (log, id)
-    };
+    let walk: Vec<&str> = input.walk.iter().map(String::as_str).collect();
+    let (log, plan_id, _) = fuzz_log_with_plan(input.log == "store", &walk);
     let surveyor = if input.surveyor == "human" {
         Surveyor::human()
     } else {
         Surveyor::robot()
     };
-    let walk: Vec<&str> = input.walk.iter().map(String::as_str).collect();
-    let plan = PlanData::for_walk(bid, &walk, 40.0, Kernel::new(20.0, 5.0, 2.0), 12.0);
-    let plan_id = log.save_plan(&plan).unwrap();
     let options = SessionOptions {
         auto_replan: input.auto_replan,
         deviation_reserve: input.deviation_reserve,
@@ -373,11 +366,9 @@ fn imdf_files(name: &str) -> std::collections::HashMap<String, String> {
 /// with the parts left apart reported.
 #[test]
 fn a_unit_stretched_two_degrees_is_refused_or_imports_in_bounded_time() {
-    let err = replay_imdf("imdf-unit-two-degrees-long-a.bin")
-        .expect_err("a unit 73 km long is over the grid limit");
-    let msg = err.to_string();
-    assert_names(
-        &msg,
+    assert_refused_naming(
+        replay_imdf("imdf-unit-two-degrees-long-a.bin"),
+        "a unit 73 km long is over the grid limit",
         &[
             "fuzz-imdf",
             "grid cells",
@@ -463,12 +454,9 @@ fn an_osm_plan_that_timed_out_in_bridging_imports_in_bounded_time() {
 /// naming the room and its size.
 #[test]
 fn an_osm_room_a_degree_long_is_refused_naming_the_room() {
-    let input = text("osm-room-a-degree-long.geojson");
-    let err = replay_osm_as(&input, "big.geojson", 30)
-        .expect_err("a room 111 km long is over the grid limit");
-    let msg = err.to_string();
-    assert_names(
-        &msg,
+    assert_refused_naming(
+        replay_osm_as(&text("osm-room-a-degree-long.geojson"), "big.geojson", 30),
+        "a room 111 km long is over the grid limit",
         &[
             "big.geojson",
             "grid cells",
@@ -497,12 +485,13 @@ fn an_osm_space_with_a_few_vertices_cut_off_bridges_in_bounded_time() {
 /// refused before any grid is laid, naming the corridor.
 #[test]
 fn an_osm_space_thousands_of_kilometres_away_is_refused_naming_it() {
-    let input = text("osm-space-beyond-range-bf79aaf7.geojson");
-    let err = replay_osm_as(&input, "far.geojson", 30)
-        .expect_err("a corridor 2,769 km away is beyond the building format's range");
-    let msg = err.to_string();
-    assert_names(
-        &msg,
+    assert_refused_naming(
+        replay_osm_as(
+            &text("osm-space-beyond-range-bf79aaf7.geojson"),
+            "far.geojson",
+            30,
+        ),
+        "a corridor 2,769 km away is beyond the building format's range",
         &[
             "far.geojson",
             "corridor \"Corridor 0\" (way/1002)",

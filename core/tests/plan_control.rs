@@ -37,6 +37,13 @@ impl Observer for FirstBest {
     }
 }
 
+/// A walk from `start` back to it within `budget`, by exact search.
+fn exact_round_trip(start: &str, budget: f64) -> PlanRequest {
+    let mut req = PlanRequest::new(start, start, budget, kernel());
+    req.settings.algorithm = Algorithm::Exact;
+    req
+}
+
 /// Cancelled 300 ms after its first report of a best walk (a fixed 300 ms from the start
 /// came before the incumbent on a loaded core, and the test then failed on the last
 /// assertion below).
@@ -44,8 +51,7 @@ impl Observer for FirstBest {
 fn cancellation_from_another_thread_stops_a_long_plan_promptly() {
     let _serial = crate::serial();
     let b = instance("area-two.json");
-    let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
-    req.settings.algorithm = Algorithm::Exact; // hours without a limit
+    let req = exact_round_trip("b00", 140.0); // hours without a limit
     let token = Arc::new(AtomicBool::new(false));
     let (tx, rx) = std::sync::mpsc::channel();
     let first = Arc::new(FirstBest(Mutex::new(Some(tx))));
@@ -181,8 +187,7 @@ fn same_seed_same_result() {
 fn time_limit_returns_the_best_so_far() {
     let _serial = crate::serial();
     let b = instance("area-two.json");
-    let mut req = PlanRequest::new("b00", "b00", 140.0, kernel());
-    req.settings.algorithm = Algorithm::Exact;
+    let mut req = exact_round_trip("b00", 140.0);
     req.settings.time_limit = Some(Duration::from_millis(400));
     let t = Instant::now();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
@@ -246,8 +251,7 @@ fn request_validation_errors_name_the_problem() {
 fn result_json_has_the_spec_shape() {
     let _serial = crate::serial();
     let b = instance("area-one.json");
-    let mut req = PlanRequest::new("r0c0", "r0c0", 30.0, kernel());
-    req.settings.algorithm = Algorithm::Exact;
+    let req = exact_round_trip("r0c0", 30.0);
     let r = plan(b, &req, &Control::new()).expect("plan");
     let v: serde_json::Value = serde_json::to_value(&r).expect("json");
     for key in [

@@ -2,7 +2,7 @@
 
 use crate::plan_common;
 
-use plan_common::{every_algorithm_is_sound, grid};
+use plan_common::{every_algorithm_is_sound, random_grid_case};
 use proptest::prelude::*;
 use trailprint::plan::Algorithm;
 
@@ -14,12 +14,8 @@ proptest! {
         w in 2usize..5, h in 2usize..4, drop in proptest::collection::vec(0usize..40, 0..4),
         s in 0usize..20, t in 0usize..20, extra in 0.0f64..12.0, seed in 0u64..1000,
     ) {
-        let b = grid(w, h, 2.0, &drop);
-        let n = b.len();
-        let (s, t) = (s % n, t % n);
-        let m = trailprint::plan::Metric::new(&b);
-        let budget = m.dist(s, t) + extra + 0.5;
-        every_algorithm_is_sound(&b, (s, t), budget, seed, |alg| {
+        let (b, ends, budget) = random_grid_case((w, h, &drop), (s, t), extra + 0.5);
+        every_algorithm_is_sound(&b, ends, budget, seed, |alg| {
             matches!(alg, Algorithm::Exact | Algorithm::RecursiveGreedy)
                 .then(|| std::time::Duration::from_millis(1500))
         });

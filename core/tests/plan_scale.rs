@@ -5,6 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use crate::plan_common::building_json;
 use trailprint::Error;
 use trailprint::building::Building;
 use trailprint::gp::{Kernel, fit_kernel};
@@ -38,13 +39,23 @@ fn line(n: usize) -> Arc<Building> {
     let e: Vec<String> = (1..n)
         .map(|i| format!(r#"{{"a":"v{}","b":"v{i}"}}"#, i - 1))
         .collect();
-    let text = format!(
-        r#"{{"format":"survey-building/1","name":"line","vertices":[{}],"edges":[{}],
-           "pilot":[{{"x":0,"y":0,"rss":{{"a":-50}}}}]}}"#,
-        v.join(","),
-        e.join(",")
-    );
+    let text = building_json("line", &v, &e, r#"[{"x":0,"y":0,"rss":{"a":-50}}]"#);
     Arc::new(Building::from_json(&text, "line").expect("valid"))
+}
+
+/// A walk from the first vertex of `b` back to it within `budget` metres, kernel `k`.
+fn round_trip(b: &Building, budget: f64, k: Kernel) -> PlanRequest {
+    let start = &b.vertices[0].id;
+    PlanRequest::new(start, start, budget, k)
+}
+
+/// The exact `f_D` of SPEC 3 of `walk`, by a fresh engine with the kernel and surveyor of
+/// `req`.
+fn exact_utility(b: &Arc<Building>, req: &PlanRequest, walk: &[usize]) -> f64 {
+    UtilityEngine::new(b.clone(), req.kernel, req.settings.model)
+        .expect("engine")
+        .utility(walk)
+        .expect("utility")
 }
 
 fn kernel() -> Kernel {
@@ -66,10 +77,7 @@ fn coverage_walks_to_the_nearest_unwalked_edge_while_the_way_back_fits() {
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     assert_eq!(r.walk, ["v0", "v1", "v2", "v3", "v2", "v1", "v0"]);
     assert_eq!(r.termination, Termination::Completed);
-    let exact = UtilityEngine::new(b, req.kernel, req.settings.model)
-        .expect("engine")
-        .utility(&r.walk_indices)
-        .expect("utility");
+    let exact = exact_utility(&b, &req, &r.walk_indices);
     assert!((exact - r.utility_nats).abs() <= 1e-12 * exact);
 }
 
@@ -78,8 +86,7 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
     let _serial = crate::serial();
     let (b, k) = office();
     let budget = 0.5 * b.total_edge_length();
-    let start = b.vertices[0].id.clone();
-    let mut req = PlanRequest::new(&start, &start, budget, k);
+    let mut req = round_trip(&b, budget, k);
     req.settings.algorithm = Algorithm::Coverage;
     let cov = plan(b.clone(), &req, &Control::new()).expect("coverage");
     req.settings.algorithm = Algorithm::Auto;
@@ -96,10 +103,7 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
         cov.utility_nats
     );
     // What auto reports is the exact f_D of SPEC 3, not its search surrogate.
-    let exact = UtilityEngine::new(b.clone(), k, req.settings.model)
-        .expect("engine")
-        .utility(&auto.walk_indices)
-        .expect("utility");
+    let exact = exact_utility(&b, &req, &auto.walk_indices);
     assert!((exact - auto.utility_nats).abs() <= 1e-9 * exact);
 }
 
@@ -107,10 +111,9 @@ fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
 fn every_algorithm_honours_its_time_limit_on_a_large_building() {
     let _serial = crate::serial();
     let (b, k) = office();
-    let start = b.vertices[0].id.clone();
     let limit = Duration::from_millis(800);
     for alg in Algorithm::ALL {
-        let mut req = PlanRequest::new(&start, &start, 200.0, k);
+        let mut req = round_trip(&b, 200.0, k);
         req.settings.algorithm = alg;
         req.settings.time_limit = Some(limit);
         let t0 = Instant::now();
@@ -142,8 +145,7 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
     );
     let k2 = fit_kernel(&area_two.pilot).expect("fit").kernel;
     for (b, k, budget) in [(office, k, 200.0), (area_two, k2, 100.0)] {
-        let start = b.vertices[0].id.clone();
-        let mut req = PlanRequest::new(&start, &start, budget, k);
+        let mut req = round_trip(&b, budget, k);
         req.settings.time_limit = Some(Duration::from_millis(1));
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
         assert!(
@@ -153,10 +155,7 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
             r.length_m
         );
         assert_eq!(r.termination, Termination::TimeLimit, "{}", b.name);
-        let exact = UtilityEngine::new(b.clone(), k, req.settings.model)
-            .expect("engine")
-            .utility(&r.walk_indices)
-            .expect("utility");
+        let exact = exact_utility(&b, &req, &r.walk_indices);
         assert!((exact - r.utility_nats).abs() <= 1e-9 * exact, "{}", b.name);
     }
 }
@@ -183,9 +182,8 @@ impl Observer for Bests {
 fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
     let _serial = crate::serial();
     let (b, k) = office();
-    let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
-    let mut req = PlanRequest::new(&start, &start, budget, k);
+    let mut req = round_trip(&b, budget, k);
     req.settings.time_limit = Some(Duration::from_secs(30));
     let obs = Arc::new(Bests::default());
     let token = Arc::new(AtomicBool::new(false));
@@ -256,9 +254,8 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
 fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let _serial = crate::serial();
     let (b, k) = office();
-    let start = b.vertices[0].id.clone();
     let budget = 0.5 * b.total_edge_length();
-    let mut req = PlanRequest::new(&start, &start, budget, k);
+    let mut req = round_trip(&b, budget, k);
     req.settings.model = Surveyor::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
     let p = Problem::new(
@@ -282,10 +279,9 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
 fn auto_never_returns_less_than_a_walk_it_has_shown() {
     let _serial = crate::serial();
     let (b, k) = office();
-    let start = b.vertices[0].id.clone();
     for (model, frac) in [(Surveyor::robot(), 1.0), (Surveyor::robot(), 0.5)] {
         let budget = frac * b.total_edge_length();
-        let mut req = PlanRequest::new(&start, &start, budget, k);
+        let mut req = round_trip(&b, budget, k);
         req.settings.model = model;
         req.settings.time_limit = Some(Duration::from_secs(2));
         let obs = Arc::new(Bests::default());
@@ -298,10 +294,7 @@ fn auto_never_returns_less_than_a_walk_it_has_shown() {
             "{frac} of the edges: returned {} nats after showing {best_shown}",
             r.utility_nats
         );
-        let exact = UtilityEngine::new(b.clone(), req.kernel, req.settings.model)
-            .expect("engine")
-            .utility(&r.walk_indices)
-            .expect("utility");
+        let exact = exact_utility(&b, &req, &r.walk_indices);
         assert!(
             (exact - r.utility_nats).abs() <= 1e-9 * exact.abs(),
             "{exact} vs {}",

@@ -10,7 +10,8 @@ use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
 use plan_common::{
-    assert_sound, every_algorithm_is_sound, grid, instance, kernel, problem, request,
+    assert_sound, every_algorithm_is_sound, grid, instance, kernel, p_budget, problem,
+    random_grid_case, request,
 };
 use proptest::prelude::*;
 use rand::SeedableRng;
@@ -194,10 +195,6 @@ impl Observer for BestLengths {
     }
 }
 
-fn p_budget(b: &Building, s: usize, t: usize, extra: f64) -> f64 {
-    trailprint::plan::Metric::new(b).dist(s, t) + extra
-}
-
 fn assert_valid(p: &Problem, w: &[usize], what: &str) {
     assert_eq!(w.first(), Some(&p.start), "{what}: start");
     assert_eq!(w.last(), Some(&p.end), "{what}: end");
@@ -242,7 +239,11 @@ fn auto_is_never_below_its_greedy_stage() {
 /// A request that keeps every algorithm busy for many seconds (Area Two at 140 m, the
 /// paper's GA settings, exact search).
 fn long_request(b: &Building, alg: Algorithm) -> PlanRequest {
-    let mut req = request(b, 0, 0, 140.0, alg);
+    // `auto` finishes the 140 m round trip in about 0.32 s on a quiet core (release build,
+    // 2026-12-04), inside the 400 ms limit of the tests below; at 200 m it still runs at
+    // the limit.
+    let budget = if alg == Algorithm::Auto { 200.0 } else { 140.0 };
+    let mut req = request(b, 0, 0, budget, alg);
     req.start = "b00".into();
     req.end = "b00".into();
     req.settings.params = Params::default();
@@ -496,12 +497,9 @@ proptest! {
         w in 5usize..8, h in 6usize..9, drop in proptest::collection::vec(0usize..120, 0..12),
         s in 0usize..60, t in 0usize..60, extra in 2.0f64..16.0, seed in 0u64..1000,
     ) {
-        let b = grid(w, h, 2.0, &drop);
-        let n = b.len();
-        prop_assert!((30..=60).contains(&n));
-        let (s, t) = (s % n, t % n);
-        let budget = p_budget(&b, s, t, extra);
-        every_algorithm_is_sound(&b, (s, t), budget, seed, |alg| {
+        let (b, ends, budget) = random_grid_case((w, h, &drop), (s, t), extra);
+        prop_assert!((30..=60).contains(&b.len()));
+        every_algorithm_is_sound(&b, ends, budget, seed, |alg| {
             Some(Duration::from_millis(if alg == Algorithm::Auto { 300 } else { 600 }))
         });
     }

@@ -29,12 +29,18 @@ fn examples(text: &str) -> Vec<String> {
     out
 }
 
-#[test]
-fn readme_examples_run_as_written() {
+/// The repository's root, and its README.
+fn root_and_readme() -> (&'static Path, String) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("repository root");
     let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    (root, readme)
+}
+
+#[test]
+fn readme_examples_run_as_written() {
+    let (root, readme) = root_and_readme();
     let list = examples(&readme);
     assert!(list.len() >= 15, "the README's examples: {list:?}");
     for cmd in [
@@ -133,10 +139,7 @@ fn assert_ids_exist(words: &[String], b: &trailprint::Building, context: &str) {
 /// newcomer can type them.
 #[test]
 fn readme_vertex_ids_exist() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("repository root");
-    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    let (root, readme) = root_and_readme();
     let section = |title: &str| -> String {
         let start = readme.find(title).unwrap_or_else(|| panic!("no {title:?}"));
         let rest = &readme[start + title.len()..];

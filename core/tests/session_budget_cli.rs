@@ -42,6 +42,14 @@ fn simulate(
     last_json(&run(db, &args))
 }
 
+/// The surveys of the first two tests: `(building, start = end, budget, algorithm)`. Area One
+/// with the auto planner (it proves its plan optimal well within the limit, so the plan
+/// does not depend on the machine's speed); Area Two with greedy (deterministic).
+const SURVEYS: [(&str, &str, &str, &str); 2] = [
+    ("area-one.json", "r0c0", "45", "auto"),
+    ("area-two.json", "b00", "140", "greedy"),
+];
+
 fn f(v: &serde_json::Value, key: &str) -> f64 {
     v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"))
 }
@@ -50,12 +58,7 @@ fn f(v: &serde_json::Value, key: &str) -> f64 {
 fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
     let dir = tempfile::tempdir().expect("dir");
     let db = dir.path().join("b.db");
-    // Area One with the auto planner (it proves its plan optimal well within the limit, so
-    // the plan does not depend on the machine's speed); Area Two with greedy (deterministic).
-    for (building, start, budget, algo) in [
-        ("area-one.json", "r0c0", "45", "auto"),
-        ("area-two.json", "b00", "140", "greedy"),
-    ] {
+    for (building, start, budget, algo) in SURVEYS {
         let human = [
             "--surveyor",
             "human",
@@ -86,10 +89,7 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
 fn a_robot_that_follows_the_plan_collects_exactly_the_planned_utility() {
     let dir = tempfile::tempdir().expect("dir");
     let db = dir.path().join("r.db");
-    for (building, start, budget, algo) in [
-        ("area-one.json", "r0c0", "45", "auto"),
-        ("area-two.json", "b00", "140", "greedy"),
-    ] {
+    for (building, start, budget, algo) in SURVEYS {
         let v = simulate(
             &db,
             building,

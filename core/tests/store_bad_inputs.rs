@@ -152,28 +152,38 @@ fn a_100_mib_file_is_refused_before_it_is_read() {
     assert_eq!(dump_file(&db), before);
 }
 
+/// Runs `buildings` and `import` of the shared instance `instance` on `db`: each must be
+/// refused with one error line naming every one of `needles`, and leave the file's bytes
+/// as they were.
+fn assert_refused_untouched(db: &Path, instance: &str, needles: &[&str]) {
+    let before = std::fs::read(db).expect("read");
+    let building = shared_instance(instance);
+    for args in [
+        vec!["buildings"],
+        vec!["import", building.to_str().expect("utf-8")],
+    ] {
+        let out = run(db, &args);
+        assert_one_error(&out, needles);
+        assert_eq!(
+            std::fs::read(db).expect("read"),
+            before,
+            "{args:?} changed the file"
+        );
+    }
+}
+
 #[test]
 fn a_file_that_is_not_sqlite_is_refused_untouched() {
     let dir = tempfile::tempdir().expect("tempdir");
     let db = dir.path().join("notes.db");
     let content = b"These are my notes, not a database. ".repeat(200);
     std::fs::write(&db, &content).expect("write");
-    let a1 = shared_instance("area-one.json");
-    for args in [
-        vec!["buildings"],
-        vec!["import", a1.to_str().expect("utf-8")],
-    ] {
-        let out = run(&db, &args);
-        assert_one_error(
-            &out,
-            &[db.to_str().expect("utf-8"), "not an SQLite database"],
-        );
-        assert_eq!(
-            std::fs::read(&db).expect("read"),
-            content,
-            "{args:?} changed the file"
-        );
-    }
+    assert_refused_untouched(
+        &db,
+        "area-one.json",
+        &[db.to_str().expect("utf-8"), "not an SQLite database"],
+    );
+    assert_eq!(std::fs::read(&db).expect("read"), content);
     let names: Vec<String> = std::fs::read_dir(dir.path())
         .expect("dir")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
@@ -192,25 +202,17 @@ fn a_database_from_a_newer_version_is_refused_untouched() {
         let conn = rusqlite::Connection::open(&db).expect("open");
         conn.pragma_update(None, "user_version", 99).expect("bump");
     }
-    let bytes = std::fs::read(&db).expect("read");
-    let a2 = shared_instance("area-two.json");
     let up_to = format!("up to {}", trailprint::store::SCHEMA_VERSION);
-    for args in [
-        vec!["buildings"],
-        vec!["import", a2.to_str().expect("utf-8")],
-    ] {
-        let out = run(&db, &args);
-        assert_one_error(
-            &out,
-            &[
-                db.to_str().expect("utf-8"),
-                "schema version 99",
-                "newer",
-                &up_to,
-            ],
-        );
-        assert_eq!(std::fs::read(&db).expect("read"), bytes);
-    }
+    assert_refused_untouched(
+        &db,
+        "area-two.json",
+        &[
+            db.to_str().expect("utf-8"),
+            "schema version 99",
+            "newer",
+            &up_to,
+        ],
+    );
 }
 
 /// Whether this process can write into a directory we made read-only (root can).

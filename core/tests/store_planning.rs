@@ -16,17 +16,40 @@ use trailprint::store::{
 };
 use trailprint::team::SurveyorTask;
 
-/// The demo building (no kernel in the file, 20 pilot locations) in a fresh store.
-fn demo_store() -> (Store, i64) {
-    let store = Store::open_in_memory().expect("store");
-    let r = store
+/// Imports the demo building (no kernel in the file, 20 pilot locations) into `store`.
+fn import_demo(store: &Store) -> i64 {
+    store
         .import_json(
             trailprint::synth::DEMO_BUILDING_JSON,
             "demo.json",
             &ImportOptions::default(),
         )
-        .expect("import");
-    (store, r.id)
+        .expect("import")
+        .id
+}
+
+/// The demo building in a fresh store.
+fn demo_store() -> (Store, i64) {
+    let store = Store::open_in_memory().expect("store");
+    let id = import_demo(&store);
+    (store, id)
+}
+
+/// The kernel of [`recorded_fit`], one that no refit of the demo gives.
+const RECORDED: Kernel = Kernel {
+    sf2: 55.0,
+    ell: 4.5,
+    sn2: 7.0,
+};
+
+/// A fit recorded elsewhere (a phone's "fit", a bundle), of kernel [`RECORDED`].
+fn recorded_fit() -> FitRecord {
+    FitRecord {
+        kernel: RECORDED,
+        log_likelihood: -10.0,
+        aps_used: vec![],
+        fitted_ms: now_ms(),
+    }
 }
 
 fn route() -> SurveyorTask {
@@ -69,23 +92,11 @@ fn without_a_kernel_the_first_plan_fits_and_records_and_later_plans_reuse_that_f
 #[test]
 fn the_latest_stored_fit_wins_over_a_refit_and_a_given_kernel_over_everything() {
     let (store, id) = demo_store();
-    // A fit recorded elsewhere (a phone's "fit", a bundle) with a kernel no refit gives.
-    let recorded = Kernel::new(55.0, 4.5, 7.0);
-    let fit_id = store
-        .record_fit(
-            id,
-            &FitRecord {
-                kernel: recorded,
-                log_likelihood: -10.0,
-                aps_used: vec![],
-                fitted_ms: now_ms(),
-            },
-        )
-        .expect("record");
+    let fit_id = store.record_fit(id, &recorded_fit()).expect("record");
     let k = store.planning_kernel(id, None).expect("kernel");
     assert_eq!(
         (k.kernel, k.source),
-        (recorded, KernelSource::StoredFit { fit_id })
+        (RECORDED, KernelSource::StoredFit { fit_id })
     );
     let given = Kernel::new(40.0, 6.0, 9.0);
     let k = store.planning_kernel(id, Some(given)).expect("kernel");
@@ -195,25 +206,8 @@ fn the_command_line_plans_a_stored_building_with_the_stored_fit() {
     let (_dir, db) = temp_db();
     let id = {
         let store = Store::open(&db).expect("open");
-        let id = store
-            .import_json(
-                trailprint::synth::DEMO_BUILDING_JSON,
-                "demo.json",
-                &ImportOptions::default(),
-            )
-            .expect("import")
-            .id;
-        store
-            .record_fit(
-                id,
-                &FitRecord {
-                    kernel: Kernel::new(55.0, 4.5, 7.0),
-                    log_likelihood: -10.0,
-                    aps_used: vec![],
-                    fitted_ms: now_ms(),
-                },
-            )
-            .expect("fit");
+        let id = import_demo(&store);
+        store.record_fit(id, &recorded_fit()).expect("fit");
         id
     };
     let id = id.to_string();
@@ -233,5 +227,5 @@ fn the_command_line_plans_a_stored_building_with_the_stored_fit() {
     let plan = store
         .load_plan(v["plan_id"].as_i64().expect("plan id"))
         .expect("plan");
-    assert_eq!(plan.record.kernel, Kernel::new(55.0, 4.5, 7.0));
+    assert_eq!(plan.record.kernel, RECORDED);
 }

@@ -74,21 +74,17 @@ fn readers_see_whole_buildings_or_none() {
                             .expect("query")
                             .collect::<Result<_, _>>()
                             .expect("rows");
+                        // The rows of `table` that belong to building `id`.
+                        let count = |table: &str, id: i64| -> i64 {
+                            tx.query_row(
+                                &format!("SELECT count(*) FROM {table} WHERE building_id = ?1"),
+                                [id],
+                                |r| r.get(0),
+                            )
+                            .expect("count")
+                        };
                         for (id, vertices, edges) in rows {
-                            let v: i64 = tx
-                                .query_row(
-                                    "SELECT count(*) FROM vertices WHERE building_id = ?1",
-                                    [id],
-                                    |r| r.get(0),
-                                )
-                                .expect("count");
-                            let e: i64 = tx
-                                .query_row(
-                                    "SELECT count(*) FROM edges WHERE building_id = ?1",
-                                    [id],
-                                    |r| r.get(0),
-                                )
-                                .expect("count");
+                            let (v, e) = (count("vertices", id), count("edges", id));
                             assert_eq!((v, e), (vertices, edges), "building {id} half-written");
                             seen.fetch_add(1, Ordering::Relaxed);
                         }

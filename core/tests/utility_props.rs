@@ -39,6 +39,25 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(1e-300)
 }
 
+/// Checks that the engine's (batch) utility of `walk`, `what` it is, is the reference's to
+/// 1e-9; returns it.
+fn assert_engine_matches_reference(
+    b: &Arc<Building>,
+    k: Kernel,
+    model: Surveyor,
+    walk: &[usize],
+    what: &str,
+) -> f64 {
+    let e = UtilityEngine::new(b.clone(), k, model).expect("engine");
+    let fast = e.utility(walk).expect("fast");
+    let slow = reference(b, &k, &model, walk);
+    assert!(
+        rel(fast, slow) < 1e-9,
+        "{model:?}: {what} {fast} vs reference {slow}"
+    );
+    fast
+}
+
 const K2: Kernel = Kernel {
     sf2: 103.22,
     ell: 32.17,
@@ -86,13 +105,7 @@ fn engine_matches_reference_on_a_140m_walk_of_area_two() {
         walk.push(w);
     }
     for model in [Surveyor::robot(), Surveyor::human()] {
-        let e = UtilityEngine::new(b.clone(), K2, model).expect("engine");
-        let fast = e.utility(&walk).expect("fast");
-        let slow = reference(&b, &K2, &model, &walk);
-        assert!(
-            rel(fast, slow) < 1e-9,
-            "{model:?}: fast {fast} vs reference {slow}"
-        );
+        let fast = assert_engine_matches_reference(&b, K2, model, &walk, "fast");
         assert!(fast > 0.0);
     }
 }
@@ -131,13 +144,7 @@ fn back_and_forth_walks_merge_coincident_samples_exactly() {
                 obs.len()
             );
         }
-        let e = UtilityEngine::new(b.clone(), k, model).expect("engine");
-        let fast = e.utility(&walk).expect("fast");
-        let slow = reference(&b, &k, &model, &walk);
-        assert!(
-            rel(fast, slow) < 1e-9,
-            "{model:?}: merged {fast} vs reference {slow}"
-        );
+        assert_engine_matches_reference(&b, k, model, &walk, "merged");
     }
 }
 

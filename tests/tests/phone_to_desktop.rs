@@ -17,32 +17,54 @@ fn demo_json() -> String {
     trailprint::synth::DEMO_BUILDING_JSON.to_string()
 }
 
+/// A phone's database: the file `phone.db` in `dir` (its path), opened through the
+/// bindings, with the demo building imported (its id).
+fn phone_with_demo(dir: &tempfile::TempDir) -> (String, Arc<TrailprintStore>, i64) {
+    let db = dir.path().join("phone.db").display().to_string();
+    let phone = TrailprintStore::open(db.clone()).expect("open");
+    let id = phone
+        .import_building_json(demo_json(), "demo".into(), false)
+        .expect("import")
+        .id;
+    (db, phone, id)
+}
+
+/// A robot's plan request through the bindings: seed 3, no time or memory limit.
+fn robot_request(
+    building_id: i64,
+    (start, end): (&str, &str),
+    budget_m: f64,
+    algorithm: PlanAlgorithm,
+) -> FfiPlanRequest {
+    FfiPlanRequest {
+        building_id,
+        start: start.into(),
+        end: end.into(),
+        budget_m,
+        surveyor: default_robot_profile(),
+        algorithm,
+        seed: 3,
+        time_limit_s: None,
+        memory_budget_mb: None,
+    }
+}
+
 #[test]
 fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let phone_db = dir.path().join("phone.db").display().to_string();
-
     // The phone imports the demo building and plans through the bindings.
-    let phone = TrailprintStore::open(phone_db.clone()).expect("open");
-    let b = phone
-        .import_building_json(demo_json(), "demo".into(), false)
-        .expect("import");
+    let (phone_db, phone, bid) = phone_with_demo(&dir);
     let building = trailprint::Building::from_json(&demo_json(), "demo").expect("demo");
     let (start, end) = (
         building.vertices[0].id.clone(),
         building.vertices[5].id.clone(),
     );
-    let job = phone.clone().new_plan(FfiPlanRequest {
-        building_id: b.id,
-        start: start.clone(),
-        end: end.clone(),
-        budget_m: 25.0,
-        surveyor: default_robot_profile(),
-        algorithm: PlanAlgorithm::Genetic,
-        seed: 3,
-        time_limit_s: None,
-        memory_budget_mb: None,
-    });
+    let job = phone.clone().new_plan(robot_request(
+        bid,
+        (&start, &end),
+        25.0,
+        PlanAlgorithm::Genetic,
+    ));
     let planned = job.run(None).expect("plan");
     assert_eq!(planned.walk.first(), Some(&start));
     assert!(planned.length_m <= 25.0 + 1e-9);
@@ -85,7 +107,7 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
     let phone_core = Store::open(&phone_db).expect("core store");
     let bundle = phone_core
         .export_bundle(
-            BuildingRef::Id(b.id),
+            BuildingRef::Id(bid),
             &trailprint::store::ExportOptions::default(),
         )
         .expect("bundle");
@@ -169,27 +191,13 @@ fn a_survey_walked_on_a_phone_reaches_the_desktop_and_steers_the_next_plan() {
 fn the_phone_and_the_command_line_plan_one_building_with_one_kernel() {
     use trailprint::store::{KernelSource, StorePlanRequest};
     let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("phone.db").display().to_string();
-    let phone = TrailprintStore::open(db.clone()).expect("open");
-    let b = phone
-        .import_building_json(demo_json(), "demo".into(), false)
-        .expect("import");
-    let request = FfiPlanRequest {
-        building_id: b.id,
-        start: "f0-c00".into(),
-        end: "f0-r5-door".into(),
-        budget_m: 30.0,
-        surveyor: default_robot_profile(),
-        algorithm: PlanAlgorithm::Greedy,
-        seed: 3,
-        time_limit_s: None,
-        memory_budget_mb: None,
-    };
+    let (db, phone, bid) = phone_with_demo(&dir);
+    let request = robot_request(bid, ("f0-c00", "f0-r5-door"), 30.0, PlanAlgorithm::Greedy);
     let on_phone = phone.clone().new_plan(request).run(None).expect("plan");
     let desk = Store::open(&db).expect("core store");
     let on_desk = desk
         .plan_and_save(
-            b.id,
+            bid,
             &StorePlanRequest {
                 route: trailprint::team::SurveyorTask {
                     start: "f0-c00".into(),
@@ -220,5 +228,5 @@ fn the_phone_and_the_command_line_plan_one_building_with_one_kernel() {
         (k.sf2, k.ell, k.sn2)
     );
     assert_eq!(on_phone.walk, on_desk.result.walk);
-    assert_eq!(desk.building_info(b.id).expect("info").fits, 1);
+    assert_eq!(desk.building_info(bid).expect("info").fits, 1);
 }

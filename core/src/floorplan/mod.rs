@@ -192,7 +192,9 @@ pub fn import_osm_text(
     origin: &str,
     options: &ImportOptions,
 ) -> Result<FloorplanImport> {
-    import_with(Format::OsmIndoor, options, origin, || osm::parse(text, origin))
+    import_with(Format::OsmIndoor, options, origin, || {
+        osm::parse(text, origin)
+    })
 }
 
 /// Imports an IMDF data set given as its files in memory (`"unit.geojson"` -> text, names
@@ -202,7 +204,9 @@ pub fn import_imdf_files(
     origin: &str,
     options: &ImportOptions,
 ) -> Result<FloorplanImport> {
-    import_with(Format::Imdf, options, origin, || imdf::read_files(files, origin))
+    import_with(Format::Imdf, options, origin, || {
+        imdf::read_files(files, origin)
+    })
 }
 
 /// Imports an IMDF zip archive given as bytes; `origin` names it in errors and is the

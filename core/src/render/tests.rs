@@ -32,6 +32,15 @@ fn assert_balanced(svg: &str) {
     assert!(stack.is_empty(), "unclosed: {stack:?}");
 }
 
+/// The value of the first `attr="..."` in `svg`, a number.
+fn first_number(svg: &str, attr: &str) -> f64 {
+    svg.split(&format!("{attr}=\""))
+        .nth(1)
+        .and_then(|w| w.split('"').next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no number {attr}"))
+}
+
 fn demo() -> Building {
     Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo")
 }
@@ -172,18 +181,7 @@ fn start_equal_to_end_has_both_markers_and_a_long_strip_is_cut_into_rows() {
     // 63 m by 2.5 m: two rows of one floor drawing, not a 1460 x 250 strip.
     assert_eq!(count(&svg, "<use "), 2);
     assert!(svg.contains("part 2 of 2"));
-    let width: f64 = svg
-        .split("width=\"")
-        .nth(1)
-        .and_then(|w| w.split('"').next())
-        .and_then(|w| w.parse().ok())
-        .expect("width");
-    let height: f64 = svg
-        .split("height=\"")
-        .nth(1)
-        .and_then(|w| w.split('"').next())
-        .and_then(|w| w.parse().ok())
-        .expect("height");
+    let (width, height) = (first_number(&svg, "width"), first_number(&svg, "height"));
     assert!(width / height < 3.0, "{width} x {height}");
 }
 

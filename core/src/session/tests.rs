@@ -1,6 +1,6 @@
 use std::sync::Arc;
 
-use super::sim::{SimOptions, World, simulate};
+use super::sim::{SimOptions, SimReport, World, simulate};
 use super::*;
 use crate::store::BuildingRef;
 use crate::synth::DEMO_BUILDING_JSON;
@@ -24,26 +24,29 @@ fn kernel() -> Kernel {
     Kernel::new(20.0, 5.0, 2.0)
 }
 
-fn setup(
-    walk: &[&str],
-    budget: f64,
-    surveyor: Surveyor,
-    options: SessionOptions,
-) -> (Arc<MemoryLog>, Session) {
+/// The walk every tee session plans: a, b, c, then the left turn to e.
+const WALK: [&str; 4] = ["a", "b", "c", "e"];
+
+/// Adds the tee to `log` and saves the plan that walks [`WALK`] within `budget`.
+fn save_tee_plan(log: &MemoryLog, budget: f64) -> i64 {
     let b = Arc::new(tee());
-    let log = Arc::new(MemoryLog::new());
     let bid = log.add_building(b.clone());
-    let ids = b.resolve_walk(walk).expect("walk");
-    let plan = log
-        .save_plan(&PlanData::for_walk(
-            bid,
-            walk,
-            budget,
-            kernel(),
-            b.walk_length(&ids),
-        ))
-        .expect("plan");
-    let s = Session::start(log.clone(), plan, surveyor, options).expect("start");
+    let ids = b.resolve_walk(&WALK).expect("walk");
+    log.save_plan(&PlanData::for_walk(
+        bid,
+        &WALK,
+        budget,
+        kernel(),
+        b.walk_length(&ids),
+    ))
+    .expect("plan")
+}
+
+/// A session on the tee that walks [`WALK`] within `budget`, with the default options.
+fn setup(budget: f64, surveyor: Surveyor) -> (Arc<MemoryLog>, Session) {
+    let log = Arc::new(MemoryLog::new());
+    let plan = save_tee_plan(&log, budget);
+    let s = Session::start(log.clone(), plan, surveyor, SessionOptions::default()).expect("start");
     (log, s)
 }
 
@@ -56,6 +59,27 @@ fn steps(s: &mut Session, t0: i64, n: u32) -> i64 {
         .expect("step");
     }
     t0 + i64::from(n) * 500
+}
+
+fn check_in(s: &mut Session, t_ms: i64, vertex: &str) -> Result<Ack> {
+    s.record(Event::CheckIn {
+        t_ms,
+        vertex: vertex.into(),
+    })
+}
+
+/// A scan event: one reading a `(bssid, rss_dbm)` pair.
+fn scan(t_ms: i64, readings: &[(&str, f64)]) -> Event {
+    Event::Scan {
+        t_ms,
+        readings: readings
+            .iter()
+            .map(|&(bssid, rss_dbm)| Reading {
+                bssid: bssid.into(),
+                rss_dbm,
+            })
+            .collect(),
+    }
 }
 
 fn human_exact_step(l: f64) -> Surveyor {
@@ -79,12 +103,7 @@ fn human_exact_step(l: f64) -> Surveyor {
 
 #[test]
 fn guidance_names_turns_and_check_ins() {
-    let (_, mut s) = setup(
-        &["a", "b", "c", "e"],
-        30.0,
-        human_exact_step(1.0),
-        SessionOptions::default(),
-    );
+    let (_, mut s) = setup(30.0, human_exact_step(1.0));
     let g = s.guidance();
     // b is straight on (no check-in); the next check-in is c, where the walk turns left.
     assert_eq!(g.next_vertex.as_deref(), Some("b"));
@@ -104,12 +123,7 @@ fn guidance_names_turns_and_check_ins() {
     let g = s.guidance();
     assert_eq!(g.next_vertex.as_deref(), Some("c"));
     assert_eq!(g.distance_m, 0.0);
-    let ack = s
-        .record(Event::CheckIn {
-            t_ms: t,
-            vertex: "c".into(),
-        })
-        .expect("check in");
+    let ack = check_in(&mut s, t, "c").expect("check in");
     assert!(!ack.off_route);
     assert_eq!(ack.position.x, 10.0);
     let g = s.guidance();
@@ -121,22 +135,9 @@ fn guidance_names_turns_and_check_ins() {
 
 #[test]
 fn scans_get_dead_reckoned_positions_and_label_noise() {
-    let (_, mut s) = setup(
-        &["a", "b", "c", "e"],
-        30.0,
-        human_exact_step(0.5),
-        SessionOptions::default(),
-    );
+    let (_, mut s) = setup(30.0, human_exact_step(0.5));
     let t = steps(&mut s, 0, 13);
-    let ack = s
-        .record(Event::Scan {
-            t_ms: t,
-            readings: vec![Reading {
-                bssid: "ap".into(),
-                rss_dbm: -60.0,
-            }],
-        })
-        .expect("scan");
+    let ack = s.record(scan(t, &[("ap", -60.0)])).expect("scan");
     let smp = ack.sample.expect("sample");
     assert!((smp.position.x - 6.5).abs() < 1e-12 && smp.position.y == 0.0);
     assert_eq!(smp.since_checkin_m, Some(6.5));
@@ -146,22 +147,12 @@ fn scans_get_dead_reckoned_positions_and_label_noise() {
 
 #[test]
 fn wrong_turn_is_off_route_and_replans_from_there_within_budget() {
-    let (_, mut s) = setup(
-        &["a", "b", "c", "e"],
-        30.0,
-        human_exact_step(1.0),
-        SessionOptions::default(),
-    );
+    let (_, mut s) = setup(30.0, human_exact_step(1.0));
     let t = steps(&mut s, 0, 5);
     // At b the walk goes straight to c; the surveyor turns to d and checks in there.
     let t = steps(&mut s, t, 5);
     let walked_before = s.tracker().walked_m();
-    let ack = s
-        .record(Event::CheckIn {
-            t_ms: t,
-            vertex: "d".into(),
-        })
-        .expect("check in");
+    let ack = check_in(&mut s, t, "d").expect("check in");
     assert!(ack.went_off_route);
     let replan = ack.replan_seq.expect("replanned");
     assert_eq!(replan, ack.seq + 1);
@@ -177,19 +168,10 @@ fn wrong_turn_is_off_route_and_replans_from_there_within_budget() {
 
 #[test]
 fn manual_replan_starts_at_the_vertex_ahead_and_fits_the_budget_left() {
-    let (_, mut s) = setup(
-        &["a", "b", "c", "e"],
-        40.0,
-        human_exact_step(1.0),
-        SessionOptions::default(),
-    );
+    let (_, mut s) = setup(40.0, human_exact_step(1.0));
     // 3 m along a-b: the replan starts at b, 2 m ahead.
     let t = steps(&mut s, 0, 3);
-    s.record(Event::Scan {
-        t_ms: t,
-        readings: vec![],
-    })
-    .expect("scan");
+    s.record(scan(t, &[])).expect("scan");
     let (origin, left) = s.tracker().replan_origin(s.building()).expect("origin");
     assert_eq!(s.building().vertices[origin].id, "b");
     assert!((left - (40.0 - 3.0 - 2.0)).abs() < 1e-12);
@@ -207,12 +189,7 @@ fn manual_replan_starts_at_the_vertex_ahead_and_fits_the_budget_left() {
 
 #[test]
 fn walking_far_past_the_due_check_in_is_off_route() {
-    let (_, mut s) = setup(
-        &["a", "b", "c", "e"],
-        30.0,
-        human_exact_step(1.0),
-        SessionOptions::default(),
-    );
+    let (_, mut s) = setup(30.0, human_exact_step(1.0));
     // Due at c after 10 m; slack 3 m + 25% of 10 m.
     let t = steps(&mut s, 0, 15);
     assert!(!s.tracker().off_route());
@@ -221,24 +198,14 @@ fn walking_far_past_the_due_check_in_is_off_route() {
     assert!(s.guidance().message.contains("check in"));
     assert!(s.replan().is_err(), "position unknown");
     // Checking in back on the walk puts the surveyor on-route again.
-    let ack = s
-        .record(Event::CheckIn {
-            t_ms: t + 10,
-            vertex: "c".into(),
-        })
-        .expect("check in");
+    let ack = check_in(&mut s, t + 10, "c").expect("check in");
     assert!(!ack.off_route);
     assert_eq!(s.tracker().off_route_events(), 1);
 }
 
 #[test]
 fn bad_events_are_rejected_and_write_nothing() {
-    let (log, mut s) = setup(
-        &["a", "b", "c", "e"],
-        30.0,
-        Surveyor::human(),
-        SessionOptions::default(),
-    );
+    let (log, mut s) = setup(30.0, Surveyor::human());
     s.record(Event::Step {
         t_ms: 1000,
         steps: 1,
@@ -246,13 +213,7 @@ fn bad_events_are_rejected_and_write_nothing() {
     .expect("step");
     let id = s.id();
     let before = (log.events(id).expect("events").len(), s.digest());
-    let scan = |rss: f64| Event::Scan {
-        t_ms: 2000,
-        readings: vec![Reading {
-            bssid: "aa:bb".into(),
-            rss_dbm: rss,
-        }],
-    };
+    let scan_rss = |rss: f64| scan(2000, &[("aa:bb", rss)]);
     let cases: Vec<(Event, &str)> = vec![
         (
             Event::Step {
@@ -268,10 +229,10 @@ fn bad_events_are_rejected_and_write_nothing() {
             },
             "unknown vertex \"zz\"",
         ),
-        (scan(f64::NAN), "NaN"),
-        (scan(3.0), "got 3"),
-        (scan(-121.0), "got -121"),
-        (scan(f64::INFINITY), "finite"),
+        (scan_rss(f64::NAN), "NaN"),
+        (scan_rss(3.0), "got 3"),
+        (scan_rss(-121.0), "got -121"),
+        (scan_rss(f64::INFINITY), "finite"),
         (
             Event::Step {
                 t_ms: 2000,
@@ -365,18 +326,55 @@ fn demo_session(surveyor: Surveyor, budget: f64) -> (Arc<MemoryLog>, Session) {
     (log, s)
 }
 
+/// Simulator options that take a wrong turn with probability `deviate`, seed 5.
+fn deviating(deviate: f64) -> SimOptions {
+    SimOptions {
+        deviate,
+        seed: 5,
+        ..SimOptions::default()
+    }
+}
+
+/// Simulates `surveyor` walking the demo plan within `budget` (world seed 3) to the end,
+/// with `on_ack` called after every acknowledged event.
+fn simulate_demo<F>(
+    surveyor: Surveyor,
+    budget: f64,
+    opts: &SimOptions,
+    on_ack: F,
+) -> (Arc<MemoryLog>, Session, Summary, SimReport)
+where
+    F: FnMut(&Session, &Event, &Ack) -> Result<()>,
+{
+    let (log, mut s) = demo_session(surveyor, budget);
+    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+    let (sum, rep) = simulate(&mut s, &world, opts, on_ack).expect("sim");
+    (log, s, sum, rep)
+}
+
+/// A robot that walks the demo plan within `budget` exactly, to the end.
+fn robot_walks_demo_plan(budget: f64) -> (Session, Summary, SimReport) {
+    let (_, s, sum, rep) = simulate_demo(
+        Surveyor::robot(),
+        budget,
+        &SimOptions::default(),
+        |_, _, _| Ok(()),
+    );
+    (s, sum, rep)
+}
+
+/// How far the collected utility is from the planned, relative to the planned.
+fn utility_gap(sum: &Summary) -> f64 {
+    (sum.collected_utility_nats - sum.planned_utility_nats).abs() / sum.planned_utility_nats
+}
+
 #[test]
 fn a_robot_walking_the_plan_exactly_collects_the_planned_utility() {
-    let (_, mut s) = demo_session(Surveyor::robot(), 60.0);
-    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-    let (sum, rep) =
-        simulate(&mut s, &world, &SimOptions::default(), |_, _, _| Ok(())).expect("sim");
+    let (s, sum, rep) = robot_walks_demo_plan(60.0);
     assert_eq!(rep.wrong_turns, 0);
     assert_eq!(sum.off_route_events, 0);
     assert_eq!(sum.replans, 0);
-    let rel =
-        (sum.collected_utility_nats - sum.planned_utility_nats).abs() / sum.planned_utility_nats;
-    assert!(rel < 1e-6, "{sum:?}");
+    assert!(utility_gap(&sum) < 1e-6, "{sum:?}");
     assert!(sum.planned_utility_nats > 1.0);
     // Progress follows the walk: every metre of it, corners included.
     let len = s.building().walk_length(s.tracker().route());
@@ -390,19 +388,12 @@ fn a_robot_walking_the_plan_exactly_collects_the_planned_utility() {
 #[test]
 fn replay_reproduces_the_live_state_event_by_event() {
     for (surveyor, deviate) in [(Surveyor::human(), 0.3), (Surveyor::robot(), 0.2)] {
-        let (log, mut s) = demo_session(surveyor, 80.0);
-        let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-        let opts = SimOptions {
-            deviate,
-            seed: 5,
-            ..SimOptions::default()
-        };
         let mut digests = std::collections::BTreeMap::new();
-        let (sum, rep) = simulate(&mut s, &world, &opts, |sess, _, ack| {
-            digests.insert(ack.last_seq(), sess.digest());
-            Ok(())
-        })
-        .expect("sim");
+        let (log, s, sum, rep) =
+            simulate_demo(surveyor, 80.0, &deviating(deviate), |sess, _, ack| {
+                digests.insert(ack.last_seq(), sess.digest());
+                Ok(())
+            });
         assert!(rep.wrong_turns > 0, "{rep:?}");
         assert!(sum.off_route_events > 0 && sum.replans > 0, "{sum:?}");
         let r = Session::resume(log.clone(), s.id()).expect("resume");
@@ -425,8 +416,7 @@ fn on_the_store_events_persist_resume_and_export() {
         .import_building(&b, Some("tee"), &ImportOptions::default())
         .expect("import");
     let _ = rep;
-    let walk = ["a", "b", "c", "e"];
-    let ids = b.resolve_walk(&walk).expect("walk");
+    let ids = b.resolve_walk(&WALK).expect("walk");
     let plan = store
         .save_plan(
             BuildingRef::Name("T"),
@@ -438,7 +428,7 @@ fn on_the_store_events_persist_resume_and_export() {
                 kernel: kernel(),
                 algorithm: crate::plan::PlanOrigin::Given,
                 seed: None,
-                walk: walk.iter().map(|s| s.to_string()).collect(),
+                walk: WALK.iter().map(|s| s.to_string()).collect(),
                 length_m: b.walk_length(&ids),
                 samples: 0,
                 utility_nats: 0.0,
@@ -456,40 +446,14 @@ fn on_the_store_events_persist_resume_and_export() {
     )
     .expect("start");
     let t = steps(&mut s, 0, 4);
-    s.record(Event::Scan {
-        t_ms: t,
-        readings: vec![
-            Reading {
-                bssid: "aa:01".into(),
-                rss_dbm: -61.5,
-            },
-            Reading {
-                bssid: "aa:02".into(),
-                rss_dbm: -80.0,
-            },
-        ],
-    })
-    .expect("scan");
+    s.record(scan(t, &[("aa:01", -61.5), ("aa:02", -80.0)]))
+        .expect("scan");
     let t = steps(&mut s, t, 6);
     // A wrong turn at b: off-route at d, replanned from d.
-    let ack = s
-        .record(Event::CheckIn {
-            t_ms: t,
-            vertex: "d".into(),
-        })
-        .expect("check in");
+    let ack = check_in(&mut s, t, "d").expect("check in");
     assert!(ack.replan_seq.is_some());
     let n = store.list_events(s.id(), 0).expect("events").len();
-    assert!(
-        s.record(Event::Scan {
-            t_ms: t,
-            readings: vec![Reading {
-                bssid: "x".into(),
-                rss_dbm: f64::NAN
-            }]
-        })
-        .is_err()
-    );
+    assert!(s.record(scan(t, &[("x", f64::NAN)])).is_err());
     assert_eq!(store.list_events(s.id(), 0).expect("events").len(), n);
     let r = Session::resume(log.clone(), s.id()).expect("resume");
     assert_eq!(r.digest(), s.digest());
@@ -548,25 +512,11 @@ impl SessionLog for DiesBeforeReplan {
 #[test]
 fn resume_finishes_a_replan_that_a_kill_interrupted() {
     let run = |log: Arc<dyn SessionLog>, mem: &Arc<MemoryLog>| {
-        let b = Arc::new(tee());
-        let bid = mem.add_building(b.clone());
-        let ids = b.resolve_walk(&["a", "b", "c", "e"]).expect("walk");
-        let pid = mem
-            .save_plan(&PlanData::for_walk(
-                bid,
-                &["a", "b", "c", "e"],
-                30.0,
-                kernel(),
-                b.walk_length(&ids),
-            ))
-            .expect("plan");
+        let pid = save_tee_plan(mem, 30.0);
         let mut s = Session::start(log, pid, human_exact_step(1.0), SessionOptions::default())
             .expect("start");
         let t = steps(&mut s, 0, 10);
-        let ack = s.record(Event::CheckIn {
-            t_ms: t,
-            vertex: "d".into(),
-        });
+        let ack = check_in(&mut s, t, "d");
         (s, ack)
     };
     let whole = Arc::new(MemoryLog::new());
@@ -606,16 +556,9 @@ fn uncertainty_from_scratch(s: &Session) -> Vec<f64> {
 #[test]
 fn incremental_progress_equals_a_from_scratch_computation() {
     for (surveyor, deviate) in [(Surveyor::human(), 0.3), (Surveyor::robot(), 0.0)] {
-        let (_, mut s) = demo_session(surveyor, 80.0);
-        let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-        let opts = SimOptions {
-            deviate,
-            seed: 5,
-            ..SimOptions::default()
-        };
         let mut checked = 0;
         let mut worst: f64 = 0.0;
-        simulate(&mut s, &world, &opts, |sess, ev, _| {
+        let (_, s, _, _) = simulate_demo(surveyor, 80.0, &deviating(deviate), |sess, ev, _| {
             if !matches!(ev, Event::Scan { .. }) || sess.samples().len() % 3 != 1 {
                 return Ok(());
             }
@@ -653,8 +596,7 @@ fn incremental_progress_equals_a_from_scratch_computation() {
             }
             checked += 1;
             Ok(())
-        })
-        .expect("sim");
+        });
         assert!(checked >= 5, "checked {checked}");
         assert!(s.samples().len() > 15, "{}", s.samples().len());
         eprintln!("{checked} checks, worst std difference {worst:e} dB");
@@ -663,13 +605,9 @@ fn incremental_progress_equals_a_from_scratch_computation() {
 
 #[test]
 fn a_robot_that_follows_the_plan_gets_no_reserve_and_exactly_the_planned_utility() {
-    let (_, mut s) = demo_session(Surveyor::robot(), 80.0);
-    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-    let (sum, _) = simulate(&mut s, &world, &SimOptions::default(), |_, _, _| Ok(())).expect("sim");
+    let (s, sum, _) = robot_walks_demo_plan(80.0);
     assert_eq!(sum.replans, 0);
     assert_eq!(s.reserve_m(), 0.0);
     assert!(!s.guidance().message.contains("reserve"));
-    let rel =
-        (sum.collected_utility_nats - sum.planned_utility_nats).abs() / sum.planned_utility_nats;
-    assert!(rel < 1e-12, "{sum:?}");
+    assert!(utility_gap(&sum) < 1e-12, "{sum:?}");
 }

@@ -18,6 +18,16 @@ pub fn instance(name: &str) -> Arc<Building> {
     Arc::new(Building::load(&path).expect("instance fixture"))
 }
 
+/// The `survey-building/1` text of a building `name`: `vertices` and `edges` are the JSON
+/// objects of its vertices and edges, `pilot` the JSON array of its pilot fingerprints.
+pub fn building_json(name: &str, vertices: &[String], edges: &[String], pilot: &str) -> String {
+    format!(
+        r#"{{"format":"survey-building/1","name":"{name}","vertices":[{}],"edges":[{}],"pilot":{pilot}}}"#,
+        vertices.join(","),
+        edges.join(",")
+    )
+}
+
 /// A `w x h` grid with `step` m edges, minus the edges in `drop` (by index in row-major
 /// edge order, skipped if that would disconnect the grid), with a few pilot points.
 pub fn grid(w: usize, h: usize, step: f64, drop: &[usize]) -> Arc<Building> {
@@ -47,15 +57,12 @@ pub fn grid(w: usize, h: usize, step: f64, drop: &[usize]) -> Arc<Building> {
             .iter()
             .map(|(a, b)| format!(r#"{{"a":"{a}","b":"{b}"}}"#))
             .collect();
-        let text = format!(
-            r#"{{"format":"survey-building/1","name":"grid","vertices":[{}],"edges":[{}],
-               "pilot":[{{"x":0.3,"y":0.1,"rss":{{"a":-50}}}},{{"x":{},"y":{},"rss":{{"a":-60}}}}]}}"#,
-            vs.join(","),
-            edges.join(","),
+        let pilot = format!(
+            r#"[{{"x":0.3,"y":0.1,"rss":{{"a":-50}}}},{{"x":{},"y":{},"rss":{{"a":-60}}}}]"#,
             (w - 1) as f64 * step * 0.6,
             (h - 1) as f64 * step * 0.7
         );
-        Building::from_json(&text, "grid")
+        Building::from_json(&building_json("grid", &vs, &edges, &pilot), "grid")
     };
     let mut kept = es.clone();
     for &d in drop {
@@ -70,6 +77,26 @@ pub fn grid(w: usize, h: usize, step: f64, drop: &[usize]) -> Arc<Building> {
         }
     }
     Arc::new(build(&kept).expect("grid"))
+}
+
+/// A budget of `extra` metres over the shortest distance from `s` to `t`.
+pub fn p_budget(b: &Building, s: usize, t: usize, extra: f64) -> f64 {
+    trailprint::plan::Metric::new(b).dist(s, t) + extra
+}
+
+/// A random case of the planner property tests: the grid [`grid`] makes of `w`, `h` and
+/// `drop`, end points `s` and `t` taken modulo its size, and a budget of `extra` metres
+/// over the shortest distance between them.
+pub fn random_grid_case(
+    (w, h, drop): (usize, usize, &[usize]),
+    (s, t): (usize, usize),
+    extra: f64,
+) -> (Arc<Building>, (usize, usize), f64) {
+    let b = grid(w, h, 2.0, drop);
+    let n = b.len();
+    let (s, t) = (s % n, t % n);
+    let budget = p_budget(&b, s, t, extra);
+    (b, (s, t), budget)
 }
 
 pub fn kernel() -> Kernel {
