@@ -12,6 +12,23 @@ use super::simd;
 /// Rows applied per update pass.
 pub const BLOCK: usize = 8;
 
+/// The first `n` entries of each of the [`BLOCK`] rows `srcs`, as an array of slices
+/// whose lengths the compiler knows are `n`, so that the loops of [`update_block`] and
+/// [`update_block4`] over `0..n` run without bounds checks.
+#[inline(always)]
+fn heads<'a>(srcs: &[&'a [f64]], n: usize) -> [&'a [f64]; BLOCK] {
+    [
+        &srcs[0][..n],
+        &srcs[1][..n],
+        &srcs[2][..n],
+        &srcs[3][..n],
+        &srcs[4][..n],
+        &srcs[5][..n],
+        &srcs[6][..n],
+        &srcs[7][..n],
+    ]
+}
+
 /// `dst[j] -= sum_t coeffs[t] * srcs[t][j]` for `t < coeffs.len() <= BLOCK`.
 #[inline(always)]
 pub fn update_block<const FMA: bool>(dst: &mut [f64], coeffs: &[f64], srcs: &[&[f64]]) {
@@ -20,16 +37,7 @@ pub fn update_block<const FMA: bool>(dst: &mut [f64], coeffs: &[f64], srcs: &[&[
         let c: [f64; BLOCK] = [
             coeffs[0], coeffs[1], coeffs[2], coeffs[3], coeffs[4], coeffs[5], coeffs[6], coeffs[7],
         ];
-        let s: [&[f64]; BLOCK] = [
-            &srcs[0][..n],
-            &srcs[1][..n],
-            &srcs[2][..n],
-            &srcs[3][..n],
-            &srcs[4][..n],
-            &srcs[5][..n],
-            &srcs[6][..n],
-            &srcs[7][..n],
-        ];
+        let s = heads(srcs, n);
         for j in 0..n {
             let mut acc = dst[j];
             for t in 0..BLOCK {
@@ -57,16 +65,7 @@ pub fn update_block4<const FMA: bool>(
     let [d0, d1, d2, d3] = d;
     let n = d0.len().min(d1.len()).min(d2.len()).min(d3.len());
     let (d0, d1, d2, d3) = (&mut d0[..n], &mut d1[..n], &mut d2[..n], &mut d3[..n]);
-    let s: [&[f64]; BLOCK] = [
-        &s[0][..n],
-        &s[1][..n],
-        &s[2][..n],
-        &s[3][..n],
-        &s[4][..n],
-        &s[5][..n],
-        &s[6][..n],
-        &s[7][..n],
-    ];
+    let s = heads(s, n);
     for j in 0..n {
         let (mut a0, mut a1, mut a2, mut a3) = (d0[j], d1[j], d2[j], d3[j]);
         for t in 0..BLOCK {
