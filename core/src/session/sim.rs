@@ -242,6 +242,28 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
         (pick, true)
     }
 
+    /// Checks in at `at`. Still off the route (no replan): the walk ahead starts by going
+    /// back to `prev`, where the surveyor left it (`due`: a check-in is expected there);
+    /// else the walk ahead is the session's, replanned or not.
+    fn check_in(
+        &mut self,
+        at: usize,
+        prev: Option<usize>,
+        plan: &mut VecDeque<(usize, bool)>,
+        due: bool,
+    ) -> Result<()> {
+        let ack = self.emit(Event::CheckIn {
+            t_ms: self.t_ms(),
+            vertex: self.building.vertices[at].id.clone(),
+        })?;
+        if ack.off_route {
+            plan.push_front((prev.unwrap_or(at), due));
+        } else {
+            *plan = self.plan_ahead();
+        }
+        Ok(())
+    }
+
     fn over_limit(&self) -> bool {
         self.report.true_walked_m
             > self.opts.max_walk_factor * self.session.tracker().budget_m() + 50.0
@@ -296,16 +318,7 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             if stop {
                 carry = 0.0;
                 self.t += self.opts.check_in_ms as f64;
-                let ack = self.emit(Event::CheckIn {
-                    t_ms: self.t_ms(),
-                    vertex: b.vertices[at].id.clone(),
-                })?;
-                if ack.off_route {
-                    // No replan: walk back to where the surveyor left the walk.
-                    plan.push_front((prev.unwrap_or(at), true));
-                } else {
-                    plan = self.plan_ahead();
-                }
+                self.check_in(at, prev, &mut plan, true)?;
             } else {
                 carry = s - len;
                 plan.pop_front();
@@ -350,15 +363,7 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             prev = Some(at);
             at = nxt;
             if wrong || self.session.tracker().off_route() {
-                let ack = self.emit(Event::CheckIn {
-                    t_ms: self.t_ms(),
-                    vertex: b.vertices[at].id.clone(),
-                })?;
-                if ack.off_route {
-                    plan.push_front((prev.unwrap_or(at), false));
-                } else {
-                    plan = self.plan_ahead();
-                }
+                self.check_in(at, prev, &mut plan, false)?;
             } else {
                 plan.pop_front();
             }
