@@ -222,6 +222,7 @@ pub fn plan_with_prior(
         start,
         end,
         budget: req.budget,
+        near: Arc::default(),
     };
     let solver = solver_for(
         req.settings.algorithm,

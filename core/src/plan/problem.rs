@@ -1,7 +1,7 @@
 //! One planning instance ([`Problem`]: building, engine, metric closure, end points and
 //! budget as indices) and what a solver returns ([`Outcome`]).
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -12,6 +12,7 @@ use crate::surveyor::Surveyor;
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
+use super::coverage::NearEdges;
 use super::{BUDGET_EPS, Metric, Run, Termination};
 
 /// One planning instance: the building with its engine and metric closure, and the
@@ -24,6 +25,9 @@ pub struct Problem {
     pub start: usize,
     pub end: usize,
     pub budget: f64,
+    /// The spread constructions' table of nearby edges, built on first use and shared by
+    /// clones (see [`Problem::near_edges`]).
+    pub near: Arc<OnceLock<Option<NearEdges>>>,
 }
 
 impl Problem {
@@ -45,6 +49,7 @@ impl Problem {
             start,
             end,
             budget,
+            near: Arc::default(),
         })
     }
 
@@ -56,6 +61,16 @@ impl Problem {
             budget,
             ..self.clone()
         }
+    }
+
+    /// For each edge, the edges whose midpoints lie within the kernel's length scale of it
+    /// (what a spread construction of novelty radius up to `ell` marks as near), built on
+    /// first use; `None` when the table would be too big to keep (then a construction
+    /// scans every edge instead).
+    pub fn near_edges(&self) -> Option<&NearEdges> {
+        self.near
+            .get_or_init(|| NearEdges::new(&self.building, self.engine.kernel().ell))
+            .as_ref()
     }
 
     /// Whether a length fits the budget.
