@@ -106,6 +106,8 @@ fn main() -> trailprint::Result<()> {
                         radius: [0.0, 0.125, 0.25, 0.5, 1.0][k % 5] * ell,
                         any_fit: true,
                         avoid_reversals: human,
+                        // Both tie rules, as the search draws them.
+                        open_ties: k % 2 == 1,
                     };
                     leg(&p, &spec, &[], Some(&mut rng), &run)
                 })

@@ -258,6 +258,7 @@ fn build(p: &Problem, radius: f64, any_fit: bool, run: &Run) -> Vec<usize> {
         radius,
         any_fit,
         avoid_reversals: false,
+        open_ties: false,
     };
     leg(p, &spec, &[], None, run)
 }
@@ -277,6 +278,12 @@ pub struct Leg {
     /// Prefer edges whose way there does not start by walking straight back along the
     /// edge just walked (a person finds pacing A-B-A odd), except at a dead end.
     pub avoid_reversals: bool,
+    /// Among equally near edges, take the one whose far end has the most unwalked edges
+    /// (the walk carries on from there) instead of the lowest index. The baseline's
+    /// lowest-index rule leaves single edges behind that the walk must come back for: on
+    /// the generated 565-vertex mall at 2,036 m it covers 1,384 m of distinct edges,
+    /// this rule 1,491 m (420.9 against 440.7 nats).
+    pub open_ties: bool,
 }
 
 /// Builds one leg of a walk: the coverage construction from `spec.from` to `spec.to`
@@ -315,6 +322,13 @@ pub fn leg(
         // Candidates ranked by (class, reach): class 0 away from everything walked, 1 any
         // unwalked edge; +2 when the way there starts by walking back (and it need not).
         let mut best: Option<(usize, f64, usize, usize, usize)> = None; // class, reach, e, x, y
+        // Unwalked edges at `v` (for `open_ties`).
+        let open = |marks: &Marks, v: usize| {
+            b.neighbours(v)
+                .iter()
+                .filter(|&&(_, e)| !marks.walked[e])
+                .count()
+        };
         let mut pool: Vec<(usize, usize, usize)> = Vec::new();
         for (e, ed) in b.edges.iter().enumerate() {
             if marks.walked[e] {
@@ -340,7 +354,7 @@ pub fn leg(
                 }
             }
             if let Some((bc, br, ..)) = best
-                && (class > bc || (class == bc && reach >= br))
+                && (class > bc || (class == bc && (reach > br || (reach == br && !spec.open_ties))))
                 && rng.is_none()
             {
                 continue;
@@ -352,7 +366,14 @@ pub fn leg(
             if first && rng.is_some() && class % 2 == 0 && fits(total) {
                 pool.push((e, x, y));
             }
-            if best.is_none_or(|(bc, br, ..)| class < bc || (class == bc && reach < br)) {
+            if best.is_none_or(|(bc, br, _, _, by)| {
+                class < bc
+                    || (class == bc
+                        && (reach < br
+                            || (spec.open_ties
+                                && reach == br
+                                && open(&marks, y) > open(&marks, by))))
+            }) {
                 best = Some((class, reach, e, x, y));
             }
         }
