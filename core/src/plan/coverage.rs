@@ -511,7 +511,9 @@ pub fn unpace(p: &Problem, walk: &[usize]) -> Vec<usize> {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::{Arc, OnceLock};
+    use std::sync::Arc;
+    #[cfg(feature = "research")]
+    use std::sync::OnceLock;
 
     use super::*;
     use crate::building::Building;
@@ -625,6 +627,8 @@ mod tests {
         assert_eq!(w, vec![0, 1, 5, 4, 0]);
     }
 
+    // The generator is a research module (feature `research`, off in the phone's build).
+    #[cfg(feature = "research")]
     /// A two-floor generated building: corridors, rooms of lattice cells, stairs.
     fn two_floors() -> Arc<Building> {
         let s = crate::synth::generate(&crate::synth::SynthParams {
@@ -642,6 +646,8 @@ mod tests {
         Arc::new(Building::from_file(s.file, "two floors").expect("valid"))
     }
 
+    // The generator is a research module (feature `research`, off in the phone's build).
+    #[cfg(feature = "research")]
     #[test]
     fn near_edge_table_lists_exactly_the_edges_a_scan_marks() {
         let b = two_floors();
@@ -672,6 +678,8 @@ mod tests {
         assert_eq!(floors.len(), 2, "{floors:?}");
     }
 
+    // The generator is a research module (feature `research`, off in the phone's build).
+    #[cfg(feature = "research")]
     #[test]
     fn spread_walks_are_the_same_with_and_without_the_near_edge_table() {
         let b = two_floors();
