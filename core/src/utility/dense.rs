@@ -74,8 +74,10 @@ pub fn factor(isa: Isa, a: &mut [f64], layout: Layout, logdet_from: usize) -> Op
     factor_after(isa, a, layout, 0, logdet_from)
 }
 
-/// Multiple of which [`factor_after`]'s already factored block must be.
-pub const KNOWN_STEP: usize = PANEL;
+/// Multiple of which [`factor_after`]'s already factored block must be. Any multiple of
+/// the block height works (a panel of the large-matrix path may be partly known); 64
+/// keeps the vertices the engine's S side reuses within 63 rows of all of them.
+pub const KNOWN_STEP: usize = 64;
 
 /// [`factor`] of a matrix whose leading `known x known` block is already factored: rows
 /// `..known` hold their factor in columns `..known` (upper triangle; the leading block of
@@ -177,6 +179,7 @@ unsafe fn factor_with<L: Lanes>(
     // only has the depth inside the panel left. Smaller matrices keep the single pass
     // (bit for bit the results of decision 0002).
     let blocked = n > CHUNK_FROM;
+    let mut pack: Option<Pack> = None;
     let mut k0 = 0;
     while k0 < n {
         let mr = MR.min(n - k0);
@@ -185,7 +188,16 @@ unsafe fn factor_with<L: Lanes>(
             // SAFETY: rows below panel0 + PANEL <= n + PANEL - 1 may run past n by less
             // than PANEL rows: only the first `n + 8` rows exist, so block rows are
             // limited to those starting below n.
-            unsafe { update_panel::<L>(ptr, ld, n, panel0, known) };
+            unsafe {
+                update_panel::<L>(
+                    ptr,
+                    ld,
+                    n,
+                    panel0,
+                    known,
+                    pack.get_or_insert_with(Pack::new),
+                )
+            };
         }
         let p0 = panel0;
         if k0 < known {
@@ -209,7 +221,17 @@ unsafe fn factor_with<L: Lanes>(
             continue;
         }
         // SAFETY: k0 + 8 <= n + 8 rows exist; k0 + 8 <= n + 8 <= ld columns.
-        unsafe { tile::<L, 1>(ptr, ld, k0, k0, mr, None, p0, k0) };
+        unsafe {
+            tile::<L, 1>(
+                ptr,
+                ld,
+                k0,
+                k0,
+                mr,
+                None,
+                Depth::in_matrix(ptr, ld, k0, k0, p0, k0),
+            )
+        };
         // The tile also wrote the strict lower triangle of the diagonal block; keep it
         // zero so that no stale value lingers in the buffer between factorisations.
         for r in 1..mr {
@@ -267,50 +289,125 @@ const TILE_DEPTH: usize = 128;
 /// Depth chunk of large factorisations, rows.
 const KC: usize = 256;
 
-/// Rows per panel of large factorisations (eight block rows).
-const PANEL: usize = 64;
+/// Rows per panel of large factorisations (sixteen block rows): each packed chunk-strip
+/// block serves them all. 128 against 64 (AVX-512, one core, n = 4,000): 478 ms against
+/// 521 ms; 256 was no faster on AVX2 and makes the in-panel pass deeper.
+const PANEL: usize = 128;
 
-/// Column strip of the panel update: a `KC x STRIP` block is 512 KiB.
-const STRIP: usize = 128;
+/// Column strip of the panel update: a packed `KC x STRIP` block is 128 KiB (64 against
+/// 128 and 256 columns: 521, 544 and 545 ms at n = 4,000, AVX-512, one core).
+const STRIP: usize = 64;
+
+/// Contiguous copies of one depth chunk of the large-matrix path, so that a tile's
+/// update streams its operands from consecutive addresses instead of reading one row of
+/// `U` every `ld` doubles: at 4,000 rows that stride is 32 KiB, a new page per row read,
+/// and the unpacked update ran at 15 GFMA/s against 25 for matrices that fit the caches
+/// (AVX-512, one core; `examples/factor_rate.rs`, decision 0002's addendum of 5 December).
+struct Pack {
+    /// The panel's multipliers: block row `blk`, depth `p`, row `r` at
+    /// `(blk * KC + p) * MR + r` (16 KiB a block row).
+    u: Vec<f64>,
+    /// One column strip, tile by tile: the tile at strip offset `o` (a multiple of 8),
+    /// `w` columns wide, holds depth `p`, column `c` at `o * KC + p * w + c`.
+    b: Vec<f64>,
+}
+
+impl Pack {
+    fn new() -> Pack {
+        Pack {
+            u: vec![0.0; PANEL * KC],
+            // A strip's last tile may run up to 8 columns past it.
+            b: vec![0.0; (STRIP + 8) * KC],
+        }
+    }
+}
 
 /// Updates the rows `panel0..panel0 + PANEL` (those below `n`), columns from each block
 /// row's diagonal to the end, by all rows above `panel0`: `C -= U[..panel0, rows]^T
-/// U[..panel0, cols]`. Tiles that straddle a block row's diagonal also update a few
-/// entries below it, which nothing reads. A panel inside the known block (rows below
+/// U[..panel0, cols]`, in depth chunks of [`KC`] rows and column strips of [`STRIP`]
+/// columns. Each chunk's multipliers and each chunk-strip block are first copied into
+/// `pack` ([`Pack`]); every entry then sees the same fused multiply-adds in the same
+/// order as without the copies. Tiles that straddle a block row's diagonal also update a
+/// few entries below it, which nothing reads. A panel inside the known block (rows below
 /// `known`, see [`factor_after`]) is updated from column `known` on only.
 ///
 /// # Safety
 /// As for [`tile`]: the buffer has `n + 8` rows of `ld >= n + 16` columns, `panel0 < n`.
 #[inline(always)]
-unsafe fn update_panel<L: Lanes>(ptr: *mut f64, ld: usize, n: usize, panel0: usize, known: usize) {
+unsafe fn update_panel<L: Lanes>(
+    ptr: *mut f64,
+    ld: usize,
+    n: usize,
+    panel0: usize,
+    known: usize,
+    pack: &mut Pack,
+) {
     let end = (panel0 + PANEL).min(n);
+    let pu = pack.u.as_mut_ptr();
+    let pb = pack.b.as_mut_ptr();
+    // Tile width at column `j0` of a strip ending at `s1`: 16 where a pair fits.
+    let width = |j0: usize, s1: usize| if L::PAIRS && j0 + 8 < s1 { 16 } else { 8 };
     let mut p0 = 0;
     while p0 < panel0 {
         let p1 = (p0 + KC).min(panel0);
+        let depth = p1 - p0;
+        // SAFETY (the copies): rows p0..p1 < n exist; columns k..k + 8 <= n + 8 and
+        // j0..j0 + w <= n + 16 are within `ld`; the packs hold PANEL * KC and
+        // (STRIP + 8) * KC doubles, and depth <= KC.
+        for (blk, k) in (panel0..end).step_by(MR).enumerate() {
+            for p in 0..depth {
+                unsafe {
+                    std::ptr::copy_nonoverlapping(
+                        ptr.add((p0 + p) * ld + k),
+                        pu.add((blk * KC + p) * MR),
+                        MR,
+                    )
+                };
+            }
+        }
         let mut s0 = if panel0 < known { known } else { panel0 };
         while s0 < n {
             let s1 = (s0 + STRIP).min(n);
-            let mut k = panel0;
-            while k < end {
+            let mut j0 = s0;
+            while j0 < s1 {
+                let w = width(j0, s1);
+                for p in 0..depth {
+                    unsafe {
+                        std::ptr::copy_nonoverlapping(
+                            ptr.add((p0 + p) * ld + j0),
+                            pb.add((j0 - s0) * KC + p * w),
+                            w,
+                        )
+                    };
+                }
+                j0 += w;
+            }
+            for (blk, k) in (panel0..end).step_by(MR).enumerate() {
                 let mr = MR.min(n - k);
-                // Tiles of this strip at or right of the block's diagonal, 16 wide from
-                // the strip's start (8 wide for a last column of 8 or fewer).
+                // Tiles of this strip at or right of the block's diagonal.
                 let mut j0 = s0;
                 while j0 < s1 {
-                    let w = if L::PAIRS && j0 + 8 < s1 { 16 } else { 8 };
+                    let w = width(j0, s1);
                     if j0 + w > k {
+                        let src = Depth {
+                            // SAFETY: inside the packs, as filled above.
+                            u: unsafe { pu.add(blk * KC * MR) },
+                            u_stride: MR,
+                            b: unsafe { pb.add((j0 - s0) * KC) },
+                            b_stride: w,
+                            len: depth,
+                        };
                         // SAFETY: j0 + 16 <= n + 16 <= ld; rows k..k + 8 <= n + 8.
                         unsafe {
                             if w == 16 {
-                                tile::<L, 2>(ptr, ld, k, j0, mr, None, p0, p1);
+                                tile::<L, 2>(ptr, ld, k, j0, mr, None, src);
                             } else {
-                                tile::<L, 1>(ptr, ld, k, j0, mr, None, p0, p1);
+                                tile::<L, 1>(ptr, ld, k, j0, mr, None, src);
                             }
                         }
                     }
                     j0 += w;
                 }
-                k += MR;
             }
             s0 = s1;
         }
@@ -339,18 +436,19 @@ unsafe fn sweep<L: Lanes>(
 ) {
     let mut j0 = (k0 + MR).max(from);
     while j0 < n {
+        let at = |j: usize| Depth::in_matrix(ptr, ld, k0, j, p0, p1);
         if j0 + 8 >= n {
             // SAFETY: j0 + 8 <= n + 8 <= ld.
-            unsafe { tile::<L, 1>(ptr, ld, k0, j0, mr, solve, p0, p1) };
+            unsafe { tile::<L, 1>(ptr, ld, k0, j0, mr, solve, at(j0)) };
             j0 += 8;
         } else {
             // SAFETY: j0 + 16 <= n + 16 <= ld.
             unsafe {
                 if L::PAIRS {
-                    tile::<L, 2>(ptr, ld, k0, j0, mr, solve, p0, p1);
+                    tile::<L, 2>(ptr, ld, k0, j0, mr, solve, at(j0));
                 } else {
-                    tile::<L, 1>(ptr, ld, k0, j0, mr, solve, p0, p1);
-                    tile::<L, 1>(ptr, ld, k0, j0 + 8, mr, solve, p0, p1);
+                    tile::<L, 1>(ptr, ld, k0, j0, mr, solve, at(j0));
+                    tile::<L, 1>(ptr, ld, k0, j0 + 8, mr, solve, at(j0 + 8));
                 }
             }
             j0 += 16;
@@ -474,14 +572,46 @@ mod x86 {
     }
 }
 
-/// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by rows `p0..p1` above
-/// `k0`, `C[r][c] -= sum_{p0<=p<p1} U[p][k0+r] U[p][c]`, with the tile held in `8 * NV` lanes
-/// vectors; with `solve` (which holds `1 / U_rr`), then solves `U_kk^T X = C` against the
-/// block's diagonal factor in the same vectors. Rows `r < mr` are stored.
+/// Where a tile's update reads the rows of `U` above it: for depth `p < len`, the eight
+/// multipliers `U[p][k0..k0 + 8]` at `u + p * u_stride` and the `8 * NV` columns
+/// `U[p][j0..]` at `b + p * b_stride`. Either the matrix itself (strides `ld`,
+/// [`Depth::in_matrix`]) or the packed copies of the large-matrix path ([`Pack`]).
+#[derive(Clone, Copy)]
+struct Depth {
+    u: *const f64,
+    u_stride: usize,
+    b: *const f64,
+    b_stride: usize,
+    len: usize,
+}
+
+impl Depth {
+    /// Rows `p0..p1` of the matrix at `a` (leading dimension `ld`) for the tile at block
+    /// row `k0` and column `j0`.
+    #[inline(always)]
+    fn in_matrix(a: *const f64, ld: usize, k0: usize, j0: usize, p0: usize, p1: usize) -> Depth {
+        // `wrapping_add`: the pointers are only read through, by `tile`, whose contract
+        // keeps them inside the buffer.
+        Depth {
+            u: a.wrapping_add(p0 * ld + k0),
+            u_stride: ld,
+            b: a.wrapping_add(p0 * ld + j0),
+            b_stride: ld,
+            len: p1 - p0,
+        }
+    }
+}
+
+/// Updates the tile of rows `k0..k0+8` and columns `j0..j0+8*NV` by the rows of `U` that
+/// `src` reads, `C[r][c] -= sum_p U[p][k0+r] U[p][c]` in the order of `p`, with the tile
+/// held in `8 * NV` lanes vectors; with `solve` (which holds `1 / U_rr`), then solves
+/// `U_kk^T X = C` against the block's diagonal factor in the same vectors. Rows `r < mr`
+/// are stored.
 ///
 /// # Safety
 /// `a` points to a buffer of leading dimension `ld` with at least `k0 + 8` rows and
-/// `j0 + 8 * NV <= ld`, and `L`'s instruction set is available.
+/// `j0 + 8 * NV <= ld`, `src` reads `len` valid rows of eight and `8 * NV` doubles, and
+/// `L`'s instruction set is available.
 // Index loops over the register arrays read as the algebra does (acc[r] -= u acc[q]).
 #[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
 #[inline(always)]
@@ -492,8 +622,7 @@ unsafe fn tile<L: Lanes, const NV: usize>(
     j0: usize,
     mr: usize,
     solve: Option<&[f64; MR]>,
-    p0: usize,
-    p1: usize,
+    src: Depth,
 ) {
     // SAFETY: every pointer below stays in rows < k0 + 8 and columns < j0 + 8 NV or
     // < k0 + 8, all within the buffer (caller's contract).
@@ -509,21 +638,22 @@ unsafe fn tile<L: Lanes, const NV: usize>(
         // `Lanes::ROWS_AT_ONCE`), over the depth in chunks of `TILE_DEPTH` rows so that
         // the second group reads the chunk's columns from L1. Each accumulator still
         // sees the same sums in the same order, so the results are those of one pass.
-        let mut c0 = p0;
-        while c0 < p1 {
-            let c1 = (c0 + TILE_DEPTH).min(p1);
+        let mut c0 = 0;
+        while c0 < src.len {
+            let c1 = (c0 + TILE_DEPTH).min(src.len);
             // Constant bounds throughout, so that the loops unroll and every accumulator
             // is a register.
             for g in 0..MR / L::ROWS_AT_ONCE {
                 let g0 = g * L::ROWS_AT_ONCE;
                 for p in c0..c1 {
-                    let row = a.add(p * ld);
+                    let urow = src.u.add(p * src.u_stride);
+                    let brow = src.b.add(p * src.b_stride);
                     let mut b = [zero; NV];
                     for (v, x) in b.iter_mut().enumerate() {
-                        *x = L::load(row.add(j0 + 8 * v));
+                        *x = L::load(brow.add(8 * v));
                     }
                     for r in g0..g0 + L::ROWS_AT_ONCE {
-                        let s = L::splat(*row.add(k0 + r));
+                        let s = L::splat(*urow.add(r));
                         for v in 0..NV {
                             acc[r][v] = L::fnmadd(s, b[v], acc[r][v]);
                         }
@@ -633,7 +763,16 @@ pub(crate) mod tests {
     /// [`factor_after`] with the leading block already factored gives the factor and the
     /// log-determinant of a whole factorisation, below and beyond [`CHUNK_FROM`] rows.
     pub(crate) fn check_known(isa: Isa) {
-        for (n, known) in [(64, 64), (70, 64), (200, 128), (1300, 1024), (1300, 640)] {
+        // (1300, 576) and (1300, 704): a panel of the large path partly known.
+        for (n, known) in [
+            (64, 64),
+            (70, 64),
+            (200, 128),
+            (1300, 1024),
+            (1300, 640),
+            (1300, 576),
+            (1300, 704),
+        ] {
             let (mut whole, m, layout) = spd(n);
             factor(isa, &mut whole, layout, 0).expect("pd");
             let (mut a, _, _) = spd(n);
