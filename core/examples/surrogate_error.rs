@@ -1,14 +1,16 @@
 //! How well the large-building search surrogate (`plan::scale::Surrogate`) ranks walks,
 //! and what it costs: the figures of `docs/decisions/0003-search-surrogate.md`.
 //!
-//!     cargo run --release -p trailprint-core --example surrogate_error [-- --model human]
+//!     cargo run --release -p trailprint-core --example surrogate_error [-- human] [-- CAP:SPAN ...]
 //!
 //! On a generated mall (565 vertices) and a two-floor campus (290), draws 120 candidate
 //! walks the way the search does (randomised spread constructions at 25% and 50% of the
 //! edge length), evaluates each exactly and by the surrogate, and prints the rank
 //! correlation (Spearman), the share of pairs ordered the same way (Kendall's
 //! concordance), the share of pairs whose exact values differ by more than 2% that the
-//! surrogate orders the same way, and the time per evaluation of both.
+//! surrogate orders the same way, and the time per evaluation of both. Each `CAP:SPAN`
+//! argument adds the rows of another surrogate (`Surrogate::with`: at most `CAP`
+//! vertices, pseudo-samples over `SPAN` metres) beside the search's own.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -63,6 +65,13 @@ fn timed_values(
 
 fn main() -> trailprint::Result<()> {
     let human = std::env::args().any(|a| a == "human");
+    // Other surrogates to measure beside the search's own: `CAP:SPAN` arguments.
+    let others: Vec<(usize, f64)> = std::env::args()
+        .filter_map(|a| {
+            let (c, s) = a.split_once(':')?;
+            Some((c.parse().ok()?, s.parse().ok()?))
+        })
+        .collect();
     let model = if human {
         Surveyor::human()
     } else {
@@ -73,9 +82,9 @@ fn main() -> trailprint::Result<()> {
         ("mall", 1, 12, 120.0, 12.0),
     ];
     println!(
-        "| building | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | surrogate ms | exact ms |"
+        "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | surrogate ms | exact ms |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for (name, floors, rooms, corridor, depth) in cases {
         let params = SynthParams {
             name: name.into(),
@@ -92,7 +101,6 @@ fn main() -> trailprint::Result<()> {
         for frac in [0.25, 0.5] {
             let budget = frac * total;
             let p = Problem::new(b.clone(), kernel, model, 0, 0, budget)?;
-            let sur = Surrogate::new(&p)?;
             let run = Run::new(Control::new(), None);
             let mut rng = ChaCha8Rng::seed_from_u64(7);
             let ell = kernel.ell;
@@ -112,30 +120,37 @@ fn main() -> trailprint::Result<()> {
                     leg(&p, &spec, &[], Some(&mut rng), &run)
                 })
                 .collect();
-            let (s, ts) = timed_values(&walks, |w| sur.value(w))?;
             let (e, te) = timed_values(&walks, |w| p.utility(w))?;
-            let rho = pearson(&ranks(&s), &ranks(&e));
-            let (mut conc, mut pairs, mut conc2, mut pairs2) = (0usize, 0usize, 0usize, 0usize);
-            for i in 0..walks.len() {
-                for j in i + 1..walks.len() {
-                    let same = (s[i] - s[j]) * (e[i] - e[j]) > 0.0;
-                    pairs += 1;
-                    conc += usize::from(same);
-                    if (e[i] - e[j]).abs() > 0.02 * e[i].max(e[j]) {
-                        pairs2 += 1;
-                        conc2 += usize::from(same);
+            let mut surrogates = vec![("search".to_string(), Surrogate::new(&p)?)];
+            for &(cap, span) in &others {
+                surrogates.push((format!("{cap}:{span}"), Surrogate::with(&p, cap, span)?));
+            }
+            for (label, sur) in surrogates {
+                let (s, ts) = timed_values(&walks, |w| sur.value(w))?;
+                let rho = pearson(&ranks(&s), &ranks(&e));
+                let (mut conc, mut pairs, mut conc2, mut pairs2) = (0usize, 0usize, 0usize, 0usize);
+                for i in 0..walks.len() {
+                    for j in i + 1..walks.len() {
+                        let same = (s[i] - s[j]) * (e[i] - e[j]) > 0.0;
+                        pairs += 1;
+                        conc += usize::from(same);
+                        if (e[i] - e[j]).abs() > 0.02 * e[i].max(e[j]) {
+                            pairs2 += 1;
+                            conc2 += usize::from(same);
+                        }
                     }
                 }
+                println!(
+                    "| {name} ({} vertices) | {label}: {} vertices, {} samples a pseudo-sample | {} | {budget:.0} m | {} | {rho:.3} | {:.1}% | {:.1}% of {pairs2} | {ts:.2} | {te:.2} |",
+                    b.len(),
+                    sur.vertices(),
+                    sur.bin(),
+                    if human { "human" } else { "robot" },
+                    walks.len(),
+                    100.0 * conc as f64 / pairs as f64,
+                    100.0 * conc2 as f64 / pairs2.max(1) as f64,
+                );
             }
-            println!(
-                "| {name} ({} vertices, surrogate {}) | {} | {budget:.0} m | {} | {rho:.3} | {:.1}% | {:.1}% of {pairs2} | {ts:.2} | {te:.2} |",
-                b.len(),
-                sur.vertices(),
-                if human { "human" } else { "robot" },
-                walks.len(),
-                100.0 * conc as f64 / pairs as f64,
-                100.0 * conc2 as f64 / pairs2.max(1) as f64,
-            );
         }
     }
     Ok(())

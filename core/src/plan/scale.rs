@@ -94,9 +94,18 @@ pub struct Surrogate {
 impl Surrogate {
     /// The surrogate of `p`'s engine (same kernel, model and prior observations).
     pub fn new(p: &Problem) -> Result<Self> {
+        let k = *p.engine.kernel();
+        Self::with(p, SURROGATE_VERTICES, (k.ell / 6.0).min(4.0))
+    }
+
+    /// A surrogate that keeps at most `cap` vertices ([`coarse_vertices`]) and merges
+    /// consecutive samples spanning up to `span` metres (at least one sample spacing)
+    /// into one pseudo-sample. [`Surrogate::new`] is the search's choice; this is for
+    /// measuring others (`examples/surrogate_error.rs`).
+    pub fn with(p: &Problem, cap: usize, span: f64) -> Result<Self> {
         let b = &p.building;
         let k = *p.engine.kernel();
-        let subset = coarse_vertices(p, SURROGATE_VERTICES);
+        let subset = coarse_vertices(p, cap);
         let engine = UtilityEngine::with_vertex_subset(
             b.clone(),
             k,
@@ -105,7 +114,7 @@ impl Surrogate {
             &subset,
         )?;
         let spacing = p.engine.model().spacing();
-        let span = (k.ell / 6.0).min(4.0).max(spacing);
+        let span = span.max(spacing);
         let bin = ((span / spacing).floor() as usize).max(1);
         Ok(Surrogate {
             engine,
