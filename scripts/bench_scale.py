@@ -17,7 +17,8 @@ Needs the release binary: cargo build --release -p trailprint-core --bin trailpr
 import argparse, json, math, os, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "target", "release", "trailprint")
+# TRAILPRINT_BIN: a copy of the binary, so that a rebuild during a run does not change it.
+BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release", "trailprint")
 CPU = "0"
 BUILDINGS = [
     ("office", ["--rooms", "4", "--corridor-length", "40", "--room-depth", "8"]),
