@@ -12,7 +12,7 @@
 //!   noise of their mean, `(sum of (sn2 + x_i)) / k^2`. A 500 m robot walk (1,000
 //!   samples at 0.5 m) becomes about 125 observations when `ell` is 40 m.
 //! * **A coarser vertex set.** `V` is replaced by one vertex per grid cell (per floor),
-//!   the cell doubling from `ell / 4` until at most [`SURROGATE_VERTICES`] remain.
+//!   the cell doubling from `ell / 8` until at most [`SURROGATE_VERTICES`] remain.
 //!
 //! The utility that `auto` reports, saves and compares is always the exact `f_D` of
 //! SPEC 3: the surrogate only ranks candidates inside the search.
@@ -164,14 +164,20 @@ impl Surrogate {
 }
 
 /// One vertex per grid cell and floor (the one nearest the cell's centre), the cell
-/// doubling from `ell / 4` (at least 0.5 m) until at most `cap` vertices remain. All
+/// doubling from `ell / 8` (at least 0.5 m) until at most `cap` vertices remain. All
 /// vertices when there are at most `cap`.
+///
+/// Why `ell / 8`: a first cell of `ell / 4` left the 565-vertex generated mall (`ell`
+/// 43.5 m) with 45 vertices although the cap allows 240; from `ell / 8` it keeps 133
+/// (the campus 192 instead of 64), and 2 s plans on the mall's 2,036 m robot row went
+/// from 432.84 to 451.75 nats (mean of seeds 1-5), the other rows within their
+/// seed-to-seed spread (decision 0003, addendum of 5 December).
 pub fn coarse_vertices(p: &Problem, cap: usize) -> Vec<usize> {
     let b = &p.building;
     if b.len() <= cap {
         return (0..b.len()).collect();
     }
-    let mut cell = (p.engine.kernel().ell / 4.0).max(0.5);
+    let mut cell = (p.engine.kernel().ell / 8.0).max(0.5);
     loop {
         let mut best: std::collections::BTreeMap<(i64, i64, i64), (f64, usize)> =
             std::collections::BTreeMap::new();

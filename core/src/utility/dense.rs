@@ -95,6 +95,25 @@ pub fn factor_after(
     known: usize,
     logdet_from: usize,
 ) -> Option<f64> {
+    factor_checked(isa, a, layout, known, logdet_from, CHUNK_FROM)
+}
+
+/// [`factor_after`], taking the large-matrix path (panels, packed depth chunks) for
+/// matrices of more than `blocked_from` rows: [`CHUNK_FROM`] in use; the tests pass
+/// smaller values to check that path on matrices small enough for Miri.
+fn factor_checked(
+    isa: Isa,
+    a: &mut [f64],
+    layout: Layout,
+    known: usize,
+    logdet_from: usize,
+    blocked_from: usize,
+) -> Option<f64> {
+    let job = Job {
+        known,
+        logdet_from,
+        blocked_from,
+    };
     assert!(a.len() >= layout.len(), "dense buffer too short");
     assert!(
         layout.ld >= layout.n + 16 && layout.ld.is_multiple_of(8),
@@ -109,56 +128,55 @@ pub fn factor_after(
         // SAFETY: an `Isa` of kind `Avx512` exists only on a CPU with AVX-512F/DQ/VL and
         // FMA (`Isa::detect`, `Isa::supported`); the buffer bounds were checked above and
         // every access stays within `layout.len()`.
-        super::simd::IsaKind::Avx512 => unsafe { factor_avx512(a, layout, known, logdet_from) },
+        super::simd::IsaKind::Avx512 => unsafe { factor_avx512(a, layout, job) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, for AVX2 and FMA.
-        super::simd::IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, known, logdet_from) },
+        super::simd::IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, job) },
         // SAFETY: bounds checked above; the portable build fuses multiply-adds where the
         // base instruction set has them (aarch64).
-        _ => unsafe {
-            factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, known, logdet_from)
-        },
+        _ => unsafe { factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, job) },
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
-unsafe fn factor_avx512(
-    a: &mut [f64],
-    layout: Layout,
-    known: usize,
-    logdet_from: usize,
-) -> Option<f64> {
+unsafe fn factor_avx512(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
     // SAFETY: forwarded from `factor_after`.
-    unsafe { factor_with::<std::arch::x86_64::__m512d>(a, layout, known, logdet_from) }
+    unsafe { factor_with::<std::arch::x86_64::__m512d>(a, layout, job) }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn factor_avx2(
-    a: &mut [f64],
-    layout: Layout,
+unsafe fn factor_avx2(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
+    // SAFETY: forwarded from `factor_after`.
+    unsafe { factor_with::<Plain<true>>(a, layout, job) }
+}
+
+/// What one factorisation is asked: the leading block already factored (`known` rows),
+/// the first row counted in the log-determinant, and the size from which the
+/// large-matrix path is taken (see [`factor_checked`]).
+#[derive(Clone, Copy)]
+struct Job {
     known: usize,
     logdet_from: usize,
-) -> Option<f64> {
-    // SAFETY: forwarded from `factor_after`.
-    unsafe { factor_with::<Plain<true>>(a, layout, known, logdet_from) }
+    blocked_from: usize,
 }
 
 /// The driver shared by every instruction set.
 ///
 /// # Safety
-/// `a` holds at least `layout.len()` elements (checked by [`factor_after`]), `known` is a
-/// multiple of `PANEL` at most `n`, and `L`'s instruction set is available.
+/// `a` holds at least `layout.len()` elements (checked by [`factor_checked`]),
+/// `job.known` is a multiple of [`KNOWN_STEP`] at most `n`, and `L`'s instruction set is
+/// available.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // `r` indexes the matrix too, through `at`
-unsafe fn factor_with<L: Lanes>(
-    a: &mut [f64],
-    layout: Layout,
-    known: usize,
-    logdet_from: usize,
-) -> Option<f64> {
+unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
     let Layout { n, ld } = layout;
+    let Job {
+        known,
+        logdet_from,
+        blocked_from,
+    } = job;
     let len = a.len();
     let ptr = a.as_mut_ptr();
     // Every access below goes through `ptr`, the kernels' and these loops' alike: indexing
@@ -180,7 +198,7 @@ unsafe fn factor_with<L: Lanes>(
     // from the L2 cache by all the panel's block rows in turn; the single pass below then
     // only has the depth inside the panel left. Smaller matrices keep the single pass
     // (bit for bit the results of decision 0002).
-    let blocked = n > CHUNK_FROM;
+    let blocked = n > blocked_from;
     let mut pack: Option<Pack> = None;
     let mut k0 = 0;
     while k0 < n {
@@ -795,6 +813,71 @@ pub(crate) mod tests {
         }
     }
 
+    /// The large-matrix path (panels, packed depth chunks) gives the single pass's factor
+    /// bit for bit: every entry sees the same multiply-adds in the same order. Forced on
+    /// small matrices (`blocked_from` 0), so that several panels, strips, depth chunks
+    /// and partly known panels are covered at sizes Miri can run.
+    pub(crate) fn check_blocked_path(isa: Isa) {
+        let cases: &[(usize, usize)] = if cfg!(miri) {
+            &[(150, 0), (200, 136)]
+        } else {
+            // 700 rows: three depth chunks of KC above the last panel.
+            &[
+                (150, 0),
+                (300, 0),
+                (300, 136),
+                (300, 200),
+                (700, 0),
+                (700, 264),
+            ]
+        };
+        for &(n, known) in cases {
+            let run = |blocked_from: usize| {
+                let (mut a, _, layout) = spd(n);
+                if known > 0 {
+                    let (mut whole, _, _) = spd(n);
+                    factor(isa, &mut whole, layout, 0).expect("pd");
+                    for i in 0..known {
+                        let row = i * layout.ld;
+                        a[row + i..row + known].copy_from_slice(&whole[row + i..row + known]);
+                    }
+                }
+                let ld = factor_checked(isa, &mut a, layout, known, n / 3, blocked_from);
+                (ld.expect("pd"), a, layout)
+            };
+            let (single, a1, layout) = run(usize::MAX);
+            let (blocked, a2, _) = run(0);
+            assert_eq!(
+                single.to_bits(),
+                blocked.to_bits(),
+                "{isa:?} n={n} known={known}: log-determinant"
+            );
+            for i in 0..n {
+                for j in i..n {
+                    let k = i * layout.ld + j;
+                    assert_eq!(
+                        a1[k].to_bits(),
+                        a2[k].to_bits(),
+                        "{isa:?} n={n} known={known}: U[{i}][{j}]"
+                    );
+                }
+            }
+        }
+    }
+
+    /// [`check_blocked_path`] on the portable lanes alone: the `isa_tests` run it on every
+    /// instruction set among slower checks; this is the one Miri runs in seconds
+    /// (`cargo +nightly miri test -p trailprint-core --no-default-features --lib
+    /// blocked_path`).
+    #[test]
+    fn blocked_path_matches_the_single_pass_on_the_portable_lanes() {
+        let generic = Isa::supported()
+            .into_iter()
+            .find(|i| i.kind() == super::super::simd::IsaKind::Generic)
+            .expect("the portable lanes are always supported");
+        check_blocked_path(generic);
+    }
+
     /// A matrix that is not positive definite is reported, not factored.
     pub(crate) fn check_indefinite(isa: Isa) {
         let layout = Layout::new(3);
@@ -815,8 +898,12 @@ pub(crate) mod tests {
                 let (mut a, m, layout) = spd(n);
                 // SAFETY: `a` holds `layout.len()` elements; the portable lanes need no
                 // CPU feature.
-                let got =
-                    unsafe { factor_with::<Plain<OTHER>>(&mut a, layout, 0, from) }.expect("pd");
+                let job = Job {
+                    known: 0,
+                    logdet_from: from,
+                    blocked_from: CHUNK_FROM,
+                };
+                let got = unsafe { factor_with::<Plain<OTHER>>(&mut a, layout, job) }.expect("pd");
                 let want = schur_logdet(&m, from);
                 assert!(
                     (got - want).abs() <= 1e-10 * want.abs().max(1.0),

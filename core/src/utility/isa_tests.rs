@@ -27,6 +27,7 @@ fn check_isa(kind: IsaKind) {
     dense::tests::check(isa);
     dense::tests::check_indefinite(isa);
     dense::tests::check_known(isa);
+    dense::tests::check_blocked_path(isa);
     engine::tests::check(isa);
 }
 
