@@ -95,25 +95,19 @@ pub fn factor_after(
     known: usize,
     logdet_from: usize,
 ) -> Option<f64> {
-    factor_checked(isa, a, layout, known, logdet_from, CHUNK_FROM)
-}
-
-/// [`factor_after`], taking the large-matrix path (panels, packed depth chunks) for
-/// matrices of more than `blocked_from` rows: [`CHUNK_FROM`] in use; the tests pass
-/// smaller values to check that path on matrices small enough for Miri.
-fn factor_checked(
-    isa: Isa,
-    a: &mut [f64],
-    layout: Layout,
-    known: usize,
-    logdet_from: usize,
-    blocked_from: usize,
-) -> Option<f64> {
     let job = Job {
         known,
         logdet_from,
-        blocked_from,
+        blocked_from: CHUNK_FROM,
     };
+    factor_checked(isa, a, layout, job)
+}
+
+/// [`factor_after`] of `job`, which also says from how many rows on the large-matrix
+/// path (panels, packed depth chunks) is taken: [`CHUNK_FROM`] in use; the tests pass
+/// smaller values to check that path on matrices small enough for Miri.
+fn factor_checked(isa: Isa, a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
+    let known = job.known;
     assert!(a.len() >= layout.len(), "dense buffer too short");
     assert!(
         layout.ld >= layout.n + 16 && layout.ld.is_multiple_of(8),
@@ -844,7 +838,12 @@ pub(crate) mod tests {
                         a[row + i..row + known].copy_from_slice(&whole[row + i..row + known]);
                     }
                 }
-                let ld = factor_checked(isa, &mut a, layout, known, n / 3, blocked_from);
+                let job = Job {
+                    known,
+                    logdet_from: n / 3,
+                    blocked_from,
+                };
+                let ld = factor_checked(isa, &mut a, layout, job);
                 (ld.expect("pd"), a, layout)
             };
             let (single, a1, layout) = run(usize::MAX);
