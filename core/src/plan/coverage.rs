@@ -510,7 +510,7 @@ pub fn unpace(p: &Problem, walk: &[usize]) -> Vec<usize> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use std::sync::Arc;
     #[cfg(feature = "research")]
     use std::sync::OnceLock;
@@ -521,8 +521,8 @@ mod tests {
     use crate::plan::{Control, Run};
     use crate::surveyor::Surveyor;
 
-    /// A 4 x 3 lattice of 2 m cells.
-    fn lattice() -> Arc<Building> {
+    /// A 4 x 3 lattice of 2 m cells (vertex `4 r + c` at `(2 c, 2 r)`).
+    pub(in crate::plan) fn lattice() -> Arc<Building> {
         let mut v = Vec::new();
         let mut e = Vec::new();
         for r in 0..3 {
@@ -545,7 +545,8 @@ mod tests {
         Arc::new(Building::from_json(&text, "lat").expect("valid"))
     }
 
-    fn problem(b: &Arc<Building>, budget: f64) -> Problem {
+    /// A robot's closed walk from vertex 0 within `budget` metres.
+    pub(in crate::plan) fn problem(b: &Arc<Building>, budget: f64) -> Problem {
         let k = Kernel {
             sf2: 10.0,
             ell: 4.0,
