@@ -14,7 +14,7 @@
 //!   (ours, the default).
 //! * The **run state** ([`Run`]) carries the caller's [`Control`] (cancel token, progress
 //!   observer), the deadline from the time limit and the seeded random generator is
-//!   created by each solver from [`PlanRequest::seed`] (`ChaCha8Rng::seed_from_u64`).
+//!   created by each solver from [`PlanSettings::seed`] (`ChaCha8Rng::seed_from_u64`).
 //! * **Termination** is an enum ([`Termination`]): completed, proved optimal, time limit,
 //!   cancelled. Solvers [`offer`](Run::offer) their best walk as they go, so a plan that
 //!   is cancelled (or a solver that runs out of time deep inside a step) returns the best

@@ -154,7 +154,7 @@ impl Problem {
     }
 }
 
-/// A solver's answer before it is dressed as a [`PlanResult`].
+/// A solver's answer before it is dressed as a [`PlanResult`](super::PlanResult).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Outcome {
     pub walk: Vec<usize>,

@@ -15,7 +15,7 @@ use crate::{Error, Result};
 #[serde(rename_all = "kebab-case")]
 pub enum Algorithm {
     /// Ours: greedy, then a genetic search seeded with it, then local search, and an
-    /// exact search when the instance is small enough (see [`auto`]).
+    /// exact search when the instance is small enough (see [`auto`](super::auto)).
     #[default]
     Auto,
     /// The paper's Algorithm 1 (ratio greedy over Steiner TSP paths).
@@ -29,7 +29,7 @@ pub enum Algorithm {
     /// Branch and bound; proves optimality when it finishes.
     Exact,
     /// The systematic walk without any utility: nearest unwalked edge first (the
-    /// baseline a surveyor without Trailprint achieves, see [`coverage`]).
+    /// baseline a surveyor without Trailprint achieves, see [`coverage`](super::coverage)).
     Coverage,
 }
 

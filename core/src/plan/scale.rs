@@ -25,15 +25,15 @@
 //!    already uses the budget well.
 //! 2. **Large-neighbourhood search.** Destroy a random stretch of the current walk (5% to
 //!    35% of its length) and rebuild it with a randomised spread leg that counts the rest
-//!    of the walk as walked; half the moves first cut a closed excursion out of the
-//!    walk (a second visit to a room), so that its budget can be spent where the stretch
-//!    is rebuilt. Candidates are drawn with the seeded generator and evaluated in
-//!    parallel in batches; the best of a batch replaces the current walk when its
-//!    surrogate value is higher, or when it is at most [`DRIFT`] (shrinking to zero over
-//!    the window) below the best walk seen, which is kept apart. For the human model every walk has its reversals
-//!    (walking straight back at a vertex that is not a dead end) repaired where the
-//!    budget allows ([`super::coverage::unpace`]), and the score loses 1% per reversal
-//!    left. When one exact evaluation is cheap beside the search window (it affords at
+//!    of the walk as walked; half the moves first cut a closed excursion out of the walk
+//!    (a second visit to a room), so that its budget can be spent where the stretch is
+//!    rebuilt. Candidates are drawn with the seeded generator and evaluated in parallel
+//!    in batches; the best of a batch replaces the current walk when its surrogate value
+//!    is higher, or when it is at most 2% below the best walk seen (record-to-record
+//!    travel, the 2% shrinking to nothing over the window; the best walk is kept apart).
+//!    For the human model every walk has its reversals (walking straight back at a vertex
+//!    that is not a dead end) repaired where the budget allows
+//!    ([`super::coverage::unpace`]), and the score loses 1% per reversal left. When one exact evaluation is cheap beside the search window (it affords at
 //!    least 40 batches in its last 80%; office-sized buildings and short walks), that last
 //!    part judges candidates by exact `f_D` instead, from the best walk known exactly:
 //!    the surrogate finds the basin, exact scores find the best walk in it. When whole

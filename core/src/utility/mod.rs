@@ -1,7 +1,7 @@
 //! The utility `f_D(P)` of SPEC section 3: mutual information between the fingerprints at
 //! all vertices and the samples of a walk plus the pilot data, in nats.
 //!
-//! [`reference`] evaluates the formula directly; [`engine`] is the fast, incremental
+//! [`reference`](mod@reference) evaluates the formula directly; [`engine`] is the fast, incremental
 //! evaluator the planners use.
 
 pub mod reference;
