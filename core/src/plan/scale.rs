@@ -31,6 +31,9 @@
 //!    in batches; the best of a batch replaces the current walk when its surrogate value
 //!    is higher, or when it is at most 2% below the best walk seen (record-to-record
 //!    travel, the 2% shrinking to nothing over the window; the best walk is kept apart).
+//!    Where the window affords many batches per vertex of the walk (small buildings and
+//!    budgets), 50 batches without a new best walk are taken as convergence: the search
+//!    moves on from a rebuild of 30% to 60% of the best walk (a kick, [`KICK_STALE`]).
 //!    For the human model every walk has its reversals (walking straight back at a vertex
 //!    that is not a dead end) repaired where the budget allows
 //!    ([`super::coverage::unpace`]), and the score loses 1% per reversal left. When one exact evaluation is cheap beside the search window (it affords at
@@ -84,6 +87,13 @@ const EXACT_PHASE_BATCHES: usize = 40;
 /// 2,036 m 198.48 -> 200.27 (+0.9%), mall human 1,018 m 144.24 -> 144.30; no change where
 /// it does not run (the mall's robot walks, campus robot 891 m).
 const SCREENED_PHASE_SHARE: f64 = 0.5;
+
+/// Least share of the time limit that the exact evaluations of the finalists before the
+/// search leave to the search, on fewer threads than finalists. Without it a longer limit
+/// could mean less search: mall robot 2,036 m (one exact evaluation 0.73 s on one core)
+/// ran 8-10 batches at 2 s, none at 2.7 s and 3.5 s (all 443.1 nats, seeds 1 and 2: the
+/// time went to finalists), and 82 batches at 3.5 s with this rule (449.78 and 462.06).
+const SEARCH_KEEP: f64 = 0.5;
 
 /// The search surrogate: an engine on a coarser vertex set, fed pseudo-samples.
 #[derive(Debug, Clone)]
@@ -304,6 +314,8 @@ pub struct Stats {
     pub exact_evals: usize,
     /// The batch at which the search switched to exact scores, if it did.
     pub exact_from_batch: Option<usize>,
+    /// Kicks: moves on from a large rebuild of the best walk after a long stall.
+    pub kicks: usize,
 }
 
 /// `auto` on a large building (see the module doc). `seed` drives every random choice.
@@ -403,15 +415,17 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         fixed.par_iter().map(timed_utility).collect()
     } else {
         // Fewer threads than finalists (one core): the best construction first, then the
-        // others only while the time left affords them and the final evaluation, so that
-        // a walk whose exact evaluation costs seconds does not overshoot the limit by
-        // several of them. A finalist left out is not offered (its surrogate rank stands).
+        // others only while the time left affords them, the final evaluation and at least
+        // SEARCH_KEEP of the limit for the search, so that a walk whose exact evaluation
+        // costs seconds neither overshoots the limit by several of them nor leaves the
+        // search no time. A finalist left out is not offered (its surrogate rank stands).
         let mut out = vec![timed_utility(&fixed[0])];
         let t1 = out[0].1;
+        let keep = run.time_limit().unwrap_or_default().mul_f64(SEARCH_KEEP);
         for w in &fixed[1..] {
             let affordable = run
                 .deadline()
-                .is_none_or(|d| Instant::now() + t1.mul_f64(2.2) <= d);
+                .is_none_or(|d| Instant::now() + t1.mul_f64(2.2) + keep <= d);
             if !affordable || run.should_stop() {
                 break;
             }
@@ -621,6 +635,34 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
                 (walk, walk_s) = (w, s);
             }
             stale += 1;
+            // A kick: the search has gone KICK_STALE batches without a new best walk, on
+            // a building and walk small enough for the window to afford many batches per
+            // vertex, so it has most likely converged on the best walk's basin. It moves
+            // on from a large rebuild of the best walk (the best walk itself is kept).
+            if stale.is_multiple_of(KICK_STALE) && cur.len() > 3 {
+                let elapsed = search_start.elapsed().as_secs_f64();
+                let affords = match stop_at {
+                    Some(t) if elapsed > 0.0 => {
+                        let window = t.saturating_duration_since(search_start).as_secs_f64();
+                        stats.batches as f64 * window / elapsed
+                    }
+                    Some(_) => 0.0,
+                    None => max_batches.min(400) as f64,
+                };
+                if affords >= KICK_BATCHES_PER_VERTEX * cur.len() as f64 {
+                    let m = kick(cur.len(), &radii, &mut rng);
+                    let w = m.apply(p, &cur, human, run);
+                    let s = if exact_phase {
+                        stats.exact_evals += 1;
+                        penalised(p, &w, p.utility(&w)?)
+                    } else {
+                        stats.surrogate_evals += 1;
+                        score(p, &sur, &w)?
+                    };
+                    (walk, walk_s) = (w, s);
+                    stats.kicks += 1;
+                }
+            }
         }
         if !exact_phase
             && exact_offers
@@ -713,6 +755,40 @@ const CUT_SHARE: f64 = 0.5;
 /// window's end. A strict climb stalls on a walk whose every rebuilt stretch is worse;
 /// 2% lets it cross to a neighbouring basin. 5% was worse on the campus (-0.4%).
 const DRIFT: f64 = 0.02;
+
+/// Batches without a new best walk after which the search moves on from a large rebuild
+/// of the best walk (a kick), when the window affords at least
+/// [`KICK_BATCHES_PER_VERTEX`] batches per vertex of the walk. Small walks on small
+/// buildings converge in a fraction of a second and then sit in one basin until the time
+/// is up: office robot 101 m, 2 s, seeds 1-8, ended at 54.94 to 55.56 nats, and its 60 s
+/// plans at 55.08 to 55.56 (seeds 1-5).
+///
+/// Measured at 2 s, one core, against no kick (mean utility, kick / none): office human
+/// 101 m 1.033 (seeds 1-8) and 1.023 (seeds 9-16), office robot 101 m 1.0035 and 1.0027;
+/// the 18 rows of `docs/benchmark-scale.md` 1.0005 (seeds 1-8), the 12 office and campus
+/// rows 1.0019 (seeds 9-16), every other row within its seed-to-seed spread. Without the
+/// per-vertex condition (a kick after every 50 stale batches on every building) the
+/// campus person rows lost 2-3%: there a stall of 50 batches is not convergence.
+const KICK_STALE: usize = 50;
+
+/// Fewest batches per vertex of the best walk the search window must afford for a kick
+/// ([`KICK_STALE`]). The benchmark's office rows at 101 m and 201 m and campus rows at
+/// 223 m (robot and person) qualify at 2 s on one core; the mall's rows do not.
+const KICK_BATCHES_PER_VERTEX: f64 = 20.0;
+
+/// A kick ([`KICK_STALE`]): rebuild a random stretch of 30% to 60% of a walk of `n`
+/// vertices, without a cut.
+fn kick(n: usize, radii: &[f64], rng: &mut ChaCha8Rng) -> Move {
+    let span = ((n as f64 * rng.random_range(0.3..0.6)).ceil() as usize).clamp(1, n - 1);
+    let i = rng.random_range(0..n - span);
+    Move {
+        cut: None,
+        i,
+        j: i + span,
+        radius: radii[rng.random_range(0..radii.len())],
+        seed: rng.random(),
+    }
+}
 
 /// One move of the large-neighbourhood search: cut the closed excursion `walk[a..b]`
 /// (`walk[a] == walk[b]`) out of the walk when `cut` says so, then rebuild the stretch
@@ -840,6 +916,44 @@ mod tests {
         // A walk that never returns to a vertex has none.
         let simple = [0, 1, 2, 3, 7, 11, 10, 9, 8];
         assert_eq!(excursion(&simple, &mut rng), None);
+    }
+
+    #[test]
+    fn a_kick_rebuilds_a_third_to_three_fifths_of_the_walk_inside_it() {
+        let radii = [0.0, 1.0, 2.0];
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for n in [4usize, 9, 50, 301] {
+            for _ in 0..200 {
+                let m = kick(n, &radii, &mut rng);
+                let span = m.j - m.i;
+                assert!(m.cut.is_none() && m.j < n, "{m:?} of {n}");
+                assert!(
+                    span >= (0.3 * n as f64).ceil() as usize && span < n,
+                    "{m:?}"
+                );
+                assert!(span <= (0.6 * n as f64).ceil() as usize, "{m:?} of {n}");
+                assert!(radii.contains(&m.radius));
+            }
+        }
+    }
+
+    #[test]
+    fn a_converged_search_kicks_and_still_returns_the_best_walk_it_offered() {
+        // The lattice at 16 m: a walk of about ten vertices, thousands of batches in a
+        // second, so the search converges and kicks.
+        let b = lattice();
+        let p = problem(&b, 16.0);
+        let run = Run::new(Control::new(), Some(Duration::from_millis(1500)));
+        let (out, stats) = plan_large(&p, &run, 5).expect("plan");
+        assert!(stats.kicks > 0, "{stats:?}");
+        p.check(&out.walk).expect("feasible");
+        let (_, best) = run.incumbent().expect("offered walks");
+        assert!(
+            out.utility >= best - 1e-12,
+            "returned {} below the best offered {best}",
+            out.utility
+        );
+        assert!((p.utility(&out.walk).expect("utility") - out.utility).abs() < 1e-9);
     }
 
     #[test]
