@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Auto against the systematic `coverage` walk on buildings the benchmark does not have:
+random `trailprint generate` buildings (1-3 floors, 2-10 rooms a side, corridors of 24-90 m,
+rooms 6-14 m deep, grids of 1.5-3 m), a random start and end on each, both surveyor
+models, budgets of 25%, 50% and 100% of the building's total edge length; `auto` with its
+default 2 s limit, one core a plan (two plans at a time, pinned to cores 0 and 1).
+
+    python3 scripts/sweep_generated.py [SEED] [BUILDINGS]     (defaults 7 and 8)
+
+Prints one line per row and flags a row where auto is below 1.05x coverage, uses less than
+95% of the budget, or takes longer than 2.35 s (wall, process start-up included); a
+refusal for memory is printed as such. The last line counts the flagged rows.
+Needs the release binary (TRAILPRINT_BIN, else target/release/trailprint).
+"""
+import json, math, os, queue, random, subprocess, sys, tempfile, threading, time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release", "trailprint")
+
+
+def main():
+    seed = int(sys.argv[1]) if len(sys.argv) > 1 else 7
+    count = int(sys.argv[2]) if len(sys.argv) > 2 else 8
+    rng = random.Random(seed)
+    tmp = tempfile.mkdtemp()
+    jobs = []
+    for k in range(count):
+        o = dict(floors=rng.choice([1, 1, 2, 3]), rooms=rng.choice([2, 3, 5, 8, 10]),
+                 corridor=rng.choice([24, 40, 60, 90]), depth=rng.choice([6, 8, 10, 14]),
+                 grid=rng.choice([1.5, 2.0, 3.0]), seed=rng.randrange(1000))
+        path = os.path.join(tmp, f"b{k}.json")
+        subprocess.run([BIN, "generate", "--out", path, "--name", f"b{k}", "--floors", str(o["floors"]),
+                        "--rooms", str(o["rooms"]), "--corridor-length", str(o["corridor"]),
+                        "--room-depth", str(o["depth"]), "--grid-spacing", str(o["grid"]),
+                        "--seed", str(o["seed"])], check=True, capture_output=True)
+        b = json.load(open(path))
+        pos = {v["id"]: (v["x"], v["y"]) for v in b["vertices"]}
+        total = sum(e.get("length", math.hypot(pos[e["a"]][0] - pos[e["b"]][0], pos[e["a"]][1] - pos[e["b"]][1]))
+                    for e in b["edges"])
+        ids = [v["id"] for v in b["vertices"]]
+        start, end = rng.choice(ids), rng.choice(ids + [None])
+        for model in ("robot", "human"):
+            for frac in (0.25, 0.5, 1.0):
+                jobs.append((f"b{k}", path, len(ids), start, end or start, model, frac * total))
+
+    def plan(job, alg, core):
+        _, path, _, start, end, model, budget = job
+        t0 = time.time()
+        out = subprocess.run(["taskset", "-c", str(core), BIN, "plan", "--building", path, "--start", start,
+                              "--end", end, "--budget", f"{budget:.1f}", "--model", model, "--algorithm", alg,
+                              "--seed", "1", "--json"], capture_output=True, text=True,
+                             env=dict(os.environ, RAYON_NUM_THREADS="1"))
+        wall = time.time() - t0
+        if out.returncode != 0:
+            return dict(error=out.stderr.strip()[:160], wall=wall)
+        d = json.loads(out.stdout)
+        return dict(u=d["utility_nats"], length=d["length_m"], wall=wall)
+
+    todo = queue.Queue()
+    for j in jobs:
+        todo.put(j)
+    results = []
+
+    def worker(core):
+        while True:
+            try:
+                j = todo.get_nowait()
+            except queue.Empty:
+                return
+            results.append((j, plan(j, "auto", core), plan(j, "coverage", core)))
+
+    threads = [threading.Thread(target=worker, args=(c,)) for c in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    flagged = 0
+    refused = 0
+    for j, a, c in sorted(results, key=lambda r: (r[0][0], r[0][5], r[0][6])):
+        name, _, nv, start, end, model, budget = j
+        head = f"{name} {nv} vertices {model} {budget:.0f} m {start} -> {end}:"
+        if "error" in a or "error" in c:
+            refused += 1
+            print(head, "refused:", a.get("error") or c.get("error"))
+            continue
+        ratio = a["u"] / c["u"]
+        flags = []
+        if ratio < 1.05:
+            flags.append("below 1.05x coverage")
+        if a["length"] < 0.95 * budget:
+            flags.append("uses less than 95% of the budget")
+        if a["wall"] > 2.35:
+            flags.append("slow")
+        flagged += bool(flags)
+        print(head, f"auto {a['u']:.2f} coverage {c['u']:.2f} ratio {ratio:.3f} "
+              f"length/budget {a['length'] / budget:.3f} wall {a['wall']:.2f} s", "; ".join(flags))
+    print(f"{len(results)} rows, {flagged} flagged, {refused} refused")
+
+
+if __name__ == "__main__":
+    main()
