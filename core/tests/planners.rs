@@ -366,78 +366,94 @@ fn every_algorithm_stops_mid_run_on_a_cancel() {
     let _serial = crate::serial();
     let two = instance("area-two.json");
     let office = office_floor();
+    let slack = Duration::from_millis(SLACK_MS);
     let mut late = Vec::new();
     for alg in Algorithm::ALL {
         if alg == Algorithm::Coverage {
             continue;
         }
-        let (b, req) = if alg == Algorithm::Greedy {
-            let mut req = long_request(&office, alg);
-            req.start = office.vertices[0].id.clone();
-            req.end = req.start.clone();
-            req.budget = 0.6 * office.total_edge_length();
-            (office.clone(), req)
-        } else {
-            (two.clone(), long_request(&two, alg))
-        };
-        let mut req = req;
-        // Searches of minutes whose first report comes within a few seconds (the paper's
-        // population for genetic, depth 2 for recursive greedy), and a limit none reaches
-        // (auto's default is 2 s).
-        req.settings.params.population = 200;
-        req.settings.params.depth = 2;
-        req.settings.time_limit = Some(Duration::from_secs(600));
-        let (tx, rx) = mpsc::channel();
-        let token = Arc::new(AtomicBool::new(false));
-        let started = Arc::new(Started {
-            tx: Mutex::new(Some(tx)),
-            best: Mutex::new(f64::NEG_INFINITY),
-        });
-        let control = Control::new()
-            .with_cancel_token(token.clone())
-            .with_observer(started.clone());
-        let canceller = std::thread::spawn(move || {
-            rx.recv().ok()?;
-            std::thread::sleep(Duration::from_millis(200));
-            token.store(true, Ordering::SeqCst);
-            Some(Instant::now())
-        });
-        let t = Instant::now();
-        let r = plan(b.clone(), &req, &control).expect("a cancelled plan still answers");
-        let stopped = Instant::now();
-        // No report before the plan ended: dropping the sender ends the canceller.
-        drop(started.tx.lock().expect("lock").take());
-        let cancelled_at = canceller
-            .join()
-            .expect("canceller")
-            .unwrap_or_else(|| panic!("{alg}: finished in {:?} without a report", t.elapsed()));
-        assert_eq!(
-            r.termination,
-            Termination::Cancelled,
-            "{alg}: finished in {:?}, before the cancel",
-            t.elapsed()
-        );
-        assert_sound(&b, &req, &r, alg.name());
-        let reported = *started.best.lock().expect("lock");
-        assert!(
-            r.utility_nats >= reported - 1e-9 * reported.abs().max(1.0),
-            "{alg}: returned {} nats after reporting a best of {reported}",
-            r.utility_nats
-        );
-        let lag = stopped.saturating_duration_since(cancelled_at);
-        println!(
-            "{alg}: cancelled after {:?}, returned {lag:?} later, {:.3} nats",
-            cancelled_at - t,
-            r.utility_nats
-        );
-        if lag > Duration::from_millis(SLACK_MS) {
-            late.push(format!("{alg}: {lag:?}"));
+        // A late return is tried once more: a stall of the machine (a clean-clone CI run
+        // once saw genetic return 262 ms after the cancel, then 0.3-0.7 ms in five runs)
+        // passes on the second try, a planner that does not check for the cancel is late
+        // both times.
+        let lag = cancel_mid_run(alg, &two, &office);
+        if lag > slack {
+            let again = cancel_mid_run(alg, &two, &office);
+            if again > slack {
+                late.push(format!("{alg}: {lag:?}, then {again:?}"));
+            }
         }
     }
     assert!(
         late.is_empty(),
-        "returned more than {SLACK_MS} ms after the cancel: {late:?}"
+        "returned more than {SLACK_MS} ms after the cancel twice: {late:?}"
     );
+}
+
+/// One run of [`every_algorithm_stops_mid_run_on_a_cancel`]: plans with `alg`, cancels
+/// 200 ms after the first progress report, checks the answer and returns how long after
+/// the cancel the plan returned.
+fn cancel_mid_run(alg: Algorithm, two: &Arc<Building>, office: &Arc<Building>) -> Duration {
+    let (b, req) = if alg == Algorithm::Greedy {
+        let mut req = long_request(office, alg);
+        req.start = office.vertices[0].id.clone();
+        req.end = req.start.clone();
+        req.budget = 0.6 * office.total_edge_length();
+        (office.clone(), req)
+    } else {
+        (two.clone(), long_request(two, alg))
+    };
+    let mut req = req;
+    // Searches of minutes whose first report comes within a few seconds (the paper's
+    // population for genetic, depth 2 for recursive greedy), and a limit none reaches
+    // (auto's default is 2 s).
+    req.settings.params.population = 200;
+    req.settings.params.depth = 2;
+    req.settings.time_limit = Some(Duration::from_secs(600));
+    let (tx, rx) = mpsc::channel();
+    let token = Arc::new(AtomicBool::new(false));
+    let started = Arc::new(Started {
+        tx: Mutex::new(Some(tx)),
+        best: Mutex::new(f64::NEG_INFINITY),
+    });
+    let control = Control::new()
+        .with_cancel_token(token.clone())
+        .with_observer(started.clone());
+    let canceller = std::thread::spawn(move || {
+        rx.recv().ok()?;
+        std::thread::sleep(Duration::from_millis(200));
+        token.store(true, Ordering::SeqCst);
+        Some(Instant::now())
+    });
+    let t = Instant::now();
+    let r = plan(b.clone(), &req, &control).expect("a cancelled plan still answers");
+    let stopped = Instant::now();
+    // No report before the plan ended: dropping the sender ends the canceller.
+    drop(started.tx.lock().expect("lock").take());
+    let cancelled_at = canceller
+        .join()
+        .expect("canceller")
+        .unwrap_or_else(|| panic!("{alg}: finished in {:?} without a report", t.elapsed()));
+    assert_eq!(
+        r.termination,
+        Termination::Cancelled,
+        "{alg}: finished in {:?}, before the cancel",
+        t.elapsed()
+    );
+    assert_sound(&b, &req, &r, alg.name());
+    let reported = *started.best.lock().expect("lock");
+    assert!(
+        r.utility_nats >= reported - 1e-9 * reported.abs().max(1.0),
+        "{alg}: returned {} nats after reporting a best of {reported}",
+        r.utility_nats
+    );
+    let lag = stopped.saturating_duration_since(cancelled_at);
+    println!(
+        "{alg}: cancelled after {:?}, returned {lag:?} later, {:.3} nats",
+        cancelled_at - t,
+        r.utility_nats
+    );
+    lag
 }
 
 /// A generated office floor (125 vertices, 402 m of edges) for a greedy that takes many
