@@ -92,7 +92,8 @@ const SCREENED_PHASE_SHARE: f64 = 0.5;
 /// search leave to the search, on fewer threads than finalists. Without it a longer limit
 /// could mean less search: mall robot 2,036 m (one exact evaluation 0.73 s on one core)
 /// ran 8-10 batches at 2 s, none at 2.7 s and 3.5 s (all 443.1 nats, seeds 1 and 2: the
-/// time went to finalists), and 82 batches at 3.5 s with this rule (449.78 and 462.06).
+/// time went to finalists), and 82 batches at 3.5 s with this rule (449.78 and 449.88
+/// nats; 462.06 for seed 2 in another run).
 const SEARCH_KEEP: f64 = 0.5;
 
 /// The search surrogate: an engine on a coarser vertex set, fed pseudo-samples.
