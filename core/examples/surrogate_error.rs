@@ -8,9 +8,10 @@
 //! edge length), evaluates each exactly and by the surrogate, and prints the rank
 //! correlation (Spearman), the share of pairs ordered the same way (Kendall's
 //! concordance), the share of pairs whose exact values differ by more than 2% that the
-//! surrogate orders the same way, and the time per evaluation of both. Each `CAP:SPAN`
-//! argument adds the rows of another surrogate (`Surrogate::with`: at most `CAP`
-//! vertices, pseudo-samples over `SPAN` metres) beside the search's own.
+//! surrogate orders the same way, the mean relative error, and the time per evaluation of
+//! both. Each `OBS:VERTICES` argument adds the rows of another surrogate
+//! (`Surrogate::with`: each vertex conditioned on `OBS` observations and `VERTICES`
+//! earlier vertices) beside the search's own.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -65,8 +66,8 @@ fn timed_values(
 
 fn main() -> trailprint::Result<()> {
     let human = std::env::args().any(|a| a == "human");
-    // Other surrogates to measure beside the search's own: `CAP:SPAN` arguments.
-    let others: Vec<(usize, f64)> = std::env::args()
+    // Other surrogates to measure beside the search's own: `OBS:VERTICES` arguments.
+    let others: Vec<(usize, usize)> = std::env::args()
         .filter_map(|a| {
             let (c, s) = a.split_once(':')?;
             Some((c.parse().ok()?, s.parse().ok()?))
@@ -82,9 +83,9 @@ fn main() -> trailprint::Result<()> {
         ("mall", 1, 12, 120.0, 12.0),
     ];
     println!(
-        "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | surrogate ms | exact ms |"
+        "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | mean relative error | surrogate ms | exact ms |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, floors, rooms, corridor, depth) in cases {
         let params = SynthParams {
             name: name.into(),
@@ -122,8 +123,8 @@ fn main() -> trailprint::Result<()> {
                 .collect();
             let (e, te) = timed_values(&walks, |w| p.utility(w))?;
             let mut surrogates = vec![("search".to_string(), Surrogate::new(&p)?)];
-            for &(cap, span) in &others {
-                surrogates.push((format!("{cap}:{span}"), Surrogate::with(&p, cap, span)?));
+            for &(o, v) in &others {
+                surrogates.push((format!("{o}:{v}"), Surrogate::with(&p, o, v)?));
             }
             for (label, sur) in surrogates {
                 let (s, ts) = timed_values(&walks, |w| sur.value(w))?;
@@ -140,15 +141,22 @@ fn main() -> trailprint::Result<()> {
                         }
                     }
                 }
+                let rel = s
+                    .iter()
+                    .zip(&e)
+                    .map(|(a, b)| ((a - b) / b).abs())
+                    .sum::<f64>()
+                    / e.len() as f64;
                 println!(
-                    "| {name} ({} vertices) | {label}: {} vertices, {} samples a pseudo-sample | {} | {budget:.0} m | {} | {rho:.3} | {:.1}% | {:.1}% of {pairs2} | {ts:.2} | {te:.2} |",
+                    "| {name} ({} vertices) | {label}: {} observations, {} vertices | {} | {budget:.0} m | {} | {rho:.3} | {:.1}% | {:.1}% of {pairs2} | {:.1}% | {ts:.2} | {te:.2} |",
                     b.len(),
-                    sur.vertices(),
-                    sur.bin(),
+                    sur.observations(),
+                    sur.earlier_vertices(),
                     if human { "human" } else { "robot" },
                     walks.len(),
                     100.0 * conc as f64 / pairs as f64,
                     100.0 * conc2 as f64 / pairs2.max(1) as f64,
+                    100.0 * rel,
                 );
             }
         }

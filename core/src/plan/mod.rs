@@ -39,6 +39,7 @@ mod request;
 mod run;
 pub mod scale;
 pub mod steiner;
+pub mod surrogate;
 
 use std::sync::Arc;
 use std::time::Instant;

@@ -2,17 +2,14 @@
 //! budgets of hundreds of metres, where an exact evaluation of one walk costs tens of
 //! milliseconds and a search cannot afford many.
 //!
-//! # The surrogate ([`Surrogate`])
-//! A search judges candidate walks by a cheaper stand-in for `f_D` with two
-//! approximations (decision record `docs/decisions/0003-search-surrogate.md` has the
-//! measured error and speed):
-//! * **Pseudo-samples.** Consecutive samples of a walk closer together than a fraction
-//!   of the kernel length (`ell / 6`, at most 4 m) tell nearly the same thing. Each run
-//!   of `k` of them on one floor becomes one observation at their mean position with the
-//!   noise of their mean, `(sum of (sn2 + x_i)) / k^2`. A 500 m robot walk (1,000
-//!   samples at 0.5 m) becomes about 125 observations when `ell` is 40 m.
-//! * **A coarser vertex set.** `V` is replaced by one vertex per grid cell (per floor),
-//!   the cell doubling from `ell / 8` until at most [`SURROGATE_VERTICES`] remain.
+//! # The surrogate ([`Surrogate`], `surrogate.rs`)
+//! A search judges candidate walks by a cheaper stand-in for `f_D`: each vertex's
+//! conditional entropy given only its nearest observations and earlier vertices (a
+//! Vecchia approximation), about 1 ms for a 500 m robot walk on a 565-vertex building
+//! where `f_D` costs 29 ms. When an exact evaluation costs no more than a surrogate one
+//! (a person's sparse samples on a building of a few hundred vertices), the search
+//! judges by `f_D` itself. Decision record `docs/decisions/0003-search-surrogate.md` has
+//! the measured error and speed.
 //!
 //! The utility that `auto` reports, saves and compares is always the exact `f_D` of
 //! SPEC 3: the surrogate only ranks candidates inside the search.
@@ -62,13 +59,10 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::coverage::{Leg, leg, reversals, unpace};
+pub use super::surrogate::Surrogate;
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::Result;
-use crate::samples::{Surveyor, sample_walk};
-use crate::utility::{Observation, UtilityEngine};
-
-/// Most vertices the surrogate keeps.
-pub const SURROGATE_VERTICES: usize = 240;
+use crate::samples::Surveyor;
 
 /// Candidates per batch of the large-neighbourhood search (evaluated in parallel).
 const BATCH: usize = 8;
@@ -96,122 +90,13 @@ const SCREENED_PHASE_SHARE: f64 = 0.5;
 /// nats; 462.06 for seed 2 in another run).
 const SEARCH_KEEP: f64 = 0.5;
 
-/// The search surrogate: an engine on a coarser vertex set, fed pseudo-samples.
-#[derive(Debug, Clone)]
-pub struct Surrogate {
-    engine: UtilityEngine,
-    /// Samples merged into one pseudo-sample.
-    bin: usize,
-    sn2: f64,
-}
-
-impl Surrogate {
-    /// The surrogate of `p`'s engine (same kernel, model and prior observations).
-    pub fn new(p: &Problem) -> Result<Self> {
-        let k = *p.engine.kernel();
-        Self::with(p, SURROGATE_VERTICES, (k.ell / 6.0).min(4.0))
-    }
-
-    /// A surrogate that keeps at most `cap` vertices ([`coarse_vertices`]) and merges
-    /// consecutive samples spanning up to `span` metres (at least one sample spacing)
-    /// into one pseudo-sample. [`Surrogate::new`] is the search's choice; this is for
-    /// measuring others (`examples/surrogate_error.rs`).
-    pub fn with(p: &Problem, cap: usize, span: f64) -> Result<Self> {
-        let b = &p.building;
-        let k = *p.engine.kernel();
-        let subset = coarse_vertices(p, cap);
-        let engine = UtilityEngine::with_vertex_subset(
-            b.clone(),
-            k,
-            *p.engine.model(),
-            p.engine.prior_observations(),
-            &subset,
-        )?;
-        let spacing = p.engine.model().spacing();
-        let span = span.max(spacing);
-        let bin = ((span / spacing).floor() as usize).max(1);
-        Ok(Surrogate {
-            engine,
-            bin,
-            sn2: k.sn2,
-        })
-    }
-
-    /// Samples merged into one pseudo-sample.
-    pub fn bin(&self) -> usize {
-        self.bin
-    }
-
-    /// Number of vertices the surrogate judges by.
-    pub fn vertices(&self) -> usize {
-        self.engine.vertex_count()
-    }
-
-    /// The surrogate value of a walk (nats, comparable only with other surrogate values).
-    pub fn value(&self, walk: &[usize]) -> Result<f64> {
-        let b = self.engine.building();
-        let samples = sample_walk(b, walk, self.engine.model(), self.engine.kernel())?;
-        let mut obs: Vec<Observation> = Vec::with_capacity(samples.len() / self.bin + 2);
-        let mut i = 0;
-        while i < samples.len() {
-            let floor = samples[i].pos.floor;
-            let mut j = i;
-            let (mut x, mut y, mut var) = (0.0, 0.0, 0.0);
-            while j < samples.len() && j - i < self.bin && samples[j].pos.floor == floor {
-                x += samples[j].pos.x;
-                y += samples[j].pos.y;
-                var += self.sn2 + samples[j].extra_noise;
-                j += 1;
-            }
-            let k = (j - i) as f64;
-            let mut pos = samples[i].pos;
-            pos.x = x / k;
-            pos.y = y / k;
-            obs.push(Observation {
-                pos,
-                extra_noise: var / (k * k) - self.sn2,
-            });
-            i = j;
-        }
-        self.engine.utility_of_observations(&obs)
-    }
-}
-
-/// One vertex per grid cell and floor (the one nearest the cell's centre), the cell
-/// doubling from `ell / 8` (at least 0.5 m) until at most `cap` vertices remain. All
-/// vertices when there are at most `cap`.
-///
-/// Why `ell / 8`: a first cell of `ell / 4` left the 565-vertex generated mall (`ell`
-/// 43.5 m) with 45 vertices although the cap allows 240; from `ell / 8` it keeps 133
-/// (the campus 192 instead of 64), and 2 s plans on the mall's 2,036 m robot row went
-/// from 432.84 to 451.75 nats (mean of seeds 1-5), the other rows within their
-/// seed-to-seed spread (decision 0003, addendum of 5 December).
-pub fn coarse_vertices(p: &Problem, cap: usize) -> Vec<usize> {
-    let b = &p.building;
-    if b.len() <= cap {
-        return (0..b.len()).collect();
-    }
-    let mut cell = (p.engine.kernel().ell / 8.0).max(0.5);
-    loop {
-        let mut best: std::collections::BTreeMap<(i64, i64, i64), (f64, usize)> =
-            std::collections::BTreeMap::new();
-        for (i, v) in b.vertices.iter().enumerate() {
-            let (cx, cy) = ((v.pos.x / cell).floor(), (v.pos.y / cell).floor());
-            let (mx, my) = ((cx + 0.5) * cell, (cy + 0.5) * cell);
-            let d = (v.pos.x - mx).hypot(v.pos.y - my);
-            let key = (v.pos.floor, cx as i64, cy as i64);
-            let e = best.entry(key).or_insert((f64::INFINITY, i));
-            if d < e.0 {
-                *e = (d, i);
-            }
-        }
-        if best.len() <= cap || cell > 1e7 {
-            let mut out: Vec<usize> = best.values().map(|&(_, i)| i).collect();
-            out.sort_unstable();
-            return out;
-        }
-        cell *= 2.0;
-    }
+/// What one surrogate evaluation costs in the units of [`super::auto::eval_units`]
+/// (about 1.6e10 a second on one core here, for both): about 1 µs per vertex and 0.5 µs
+/// per sample (`examples/surrogate_error.rs`: campus 290 vertices, human 223 m 0.28 ms;
+/// mall 565 vertices, robot 509 m 1.19 ms).
+fn surrogate_units(p: &Problem) -> f64 {
+    let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
+    16_000.0 * p.building.len() as f64 + 8_000.0 * n
 }
 
 /// Share of a walk's value that one reversal costs, for a person: a walk that paces back
@@ -487,11 +372,15 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         && super::auto::eval_units(p) * (BATCH * EXACT_PHASE_BATCHES) as f64
             <= super::auto::UNITS_PER_SECOND)
         .then_some((max_batches as f64 * (1.0 - EXACT_PHASE_SHARE)) as usize);
+    // 2d. When an exact evaluation costs no more than a surrogate one (a person's walks,
+    //     a sample every 4.8 m, on buildings of a few hundred vertices), the whole search
+    //     judges by exact `f_D`.
+    let exact_only = super::auto::eval_units(p) <= surrogate_units(p);
     // 2c. Else, when one exact evaluation per batch is affordable (EXACT_PHASE_BATCHES of
     //     them in the last SCREENED_PHASE_SHARE of the window), that part is *screened*:
     //     the surrogate still ranks each batch, and its best candidate is evaluated
     //     exactly and accepted only when that beats the current walk's exact score.
-    let screen_from: Option<Instant> = if exact_from.is_none() {
+    let screen_from: Option<Instant> = if exact_from.is_none() && !exact_only {
         stop_at.and_then(|t| {
             let window = t.checked_duration_since(Instant::now())?;
             let share = window.mul_f64(SCREENED_PHASE_SHARE);
@@ -518,7 +407,8 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             break;
         }
         if !exact_phase
-            && (exact_from.is_some_and(|t| Instant::now() >= t)
+            && (exact_only
+                || exact_from.is_some_and(|t| Instant::now() >= t)
                 || screen_from.is_some_and(|t| Instant::now() >= t)
                 || exact_from_batch.is_some_and(|b| stats.batches >= b))
         {
