@@ -91,12 +91,12 @@ const SCREENED_PHASE_SHARE: f64 = 0.5;
 const SEARCH_KEEP: f64 = 0.5;
 
 /// What one surrogate evaluation costs in the units of [`super::auto::eval_units`]
-/// (about 1.6e10 a second on one core here, for both): about 1 µs per vertex and 0.5 µs
-/// per sample (`examples/surrogate_error.rs`: campus 290 vertices, human 223 m 0.28 ms;
-/// mall 565 vertices, robot 509 m 1.19 ms).
+/// (about 1.6e10 a second on one core here, for both): about 0.8 µs per vertex and
+/// 0.2 µs per sample (`examples/surrogate_error.rs`, one core: campus, 290 vertices,
+/// human 223 m 0.22 ms; mall, 565 vertices, human 509 m 0.50 ms, robot 509 m 0.67 ms).
 fn surrogate_units(p: &Problem) -> f64 {
     let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
-    16_000.0 * p.building.len() as f64 + 8_000.0 * n
+    13_000.0 * p.building.len() as f64 + 3_000.0 * n
 }
 
 /// Share of a walk's value that one reversal costs, for a person: a walk that paces back
