@@ -21,7 +21,7 @@
 //!    exactly and offered at once, so a cancelled or timed-out plan returns a walk that
 //!    already uses the budget well.
 //! 2. **Large-neighbourhood search.** Destroy a random stretch of the current walk (5% to
-//!    35% of its length) and rebuild it with a randomised spread leg that counts the rest
+//!    35% of its vertices, at most [`STRETCH_MAX_VERTICES`]) and rebuild it with a randomised spread leg that counts the rest
 //!    of the walk as walked; half the moves first cut a closed excursion out of the walk
 //!    (a second visit to a room), so that its budget can be spent where the stretch is
 //!    rebuilt. Candidates are drawn with the seeded generator and evaluated in parallel
@@ -444,7 +444,13 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
                     None
                 };
                 let n = walk.len() - cut.map_or(0, |(a, b)| b - a);
-                let frac = rng.random_range(0.05..0.35);
+                // 5% to 35% of the walk, but at most STRETCH_MAX_VERTICES (and from at most
+                // STRETCH_MIN_VERTICES) vertices: long walks take local moves.
+                let hi = 0.35f64.min(STRETCH_MAX_VERTICES / n.max(1) as f64);
+                let lo = 0.05f64
+                    .min(STRETCH_MIN_VERTICES / n.max(1) as f64)
+                    .min(0.5 * hi);
+                let frac = rng.random_range(lo..hi);
                 let i = rng.random_range(0..n.max(1));
                 let span = ((n as f64 * frac).ceil() as usize).max(1);
                 let j = (i + span).min(n - 1);
@@ -632,6 +638,20 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     report(1.0, "done".into());
     Ok((Outcome::new(walk, utility, term), stats))
 }
+
+/// Most vertices of the walk that one move of the search rebuilds (the stretch is 5% to
+/// 35% of the walk, capped by this). On long walks a fraction made every move a large
+/// perturbation, almost always worse, and the few batches of a 2 s window found little.
+/// Measured at 2 s, one core, seeds 1-4, against no cap (mean utility with / without,
+/// `docs/benchmark-scale.md`'s 18 planned rows of office, campus and mall): mean 1.0136,
+/// campus robot 891 m (413 walk vertices) 1.062, mall robot 1,018 m 1.039 and 2,036 m
+/// 1.042, mall human 1,018 m 1.049; lowest mall robot 509 m 0.993. Caps of 90, 60, 40 and
+/// 15 vertices gave 1.0049, 1.0103, 1.0125 and 1.0126 (15: mall robot 509 m 0.980).
+const STRETCH_MAX_VERTICES: f64 = 25.0;
+
+/// The shortest stretch a move may rebuild is 5% of the walk or this many vertices,
+/// whichever is less (see [`STRETCH_MAX_VERTICES`]).
+const STRETCH_MIN_VERTICES: f64 = 4.0;
 
 /// Share of the search's moves that first cut a closed excursion out of the walk
 /// ([`Move`]). With [`DRIFT`], measured at 2 s, one core, seeds 1-8, against neither:
