@@ -401,12 +401,6 @@ fn search(nodes: &[([f64; 2], u32)], axis: usize, q: [f64; 2], out: &mut Knn) {
 mod tests {
     use super::super::coverage::tests::{lattice, problem};
     use super::*;
-    use crate::gp::fit_kernel;
-    use crate::plan::coverage::{Leg, leg};
-    use crate::plan::{Control, Run};
-    use crate::synth::{SynthParams, generate};
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn with_every_observation_and_earlier_vertex_as_neighbours_it_is_f_d() {
@@ -442,66 +436,81 @@ mod tests {
         }
     }
 
-    #[test]
-    fn it_orders_walks_as_f_d_does_on_a_generated_office() {
-        // Randomised spread walks of a quarter of the edge length, as the search draws
-        // them: every pair whose utilities differ by more than 2% must be ordered the
-        // same way by the search's surrogate, and its values stay within 10% of `f_D`.
-        let params = SynthParams {
-            rooms_per_side: 3,
-            corridor_length_m: 30.0,
-            ..SynthParams::default()
-        };
-        let b = Arc::new(
-            crate::building::Building::from_file(generate(&params).expect("synth").file, "office")
+    /// Needs the building generator (`research` feature, on by default).
+    #[cfg(feature = "research")]
+    mod generated {
+        use super::*;
+        use crate::gp::fit_kernel;
+        use crate::plan::coverage::{Leg, leg};
+        use crate::plan::{Control, Run};
+        use crate::synth::{SynthParams, generate};
+        use rand::SeedableRng;
+        use rand_chacha::ChaCha8Rng;
+
+        #[test]
+        fn it_orders_walks_as_f_d_does_on_a_generated_office() {
+            // Randomised spread walks of a quarter of the edge length, as the search draws
+            // them: every pair whose utilities differ by more than 2% must be ordered the
+            // same way by the search's surrogate, and its values stay within 10% of `f_D`.
+            let params = SynthParams {
+                rooms_per_side: 3,
+                corridor_length_m: 30.0,
+                ..SynthParams::default()
+            };
+            let b = Arc::new(
+                crate::building::Building::from_file(
+                    generate(&params).expect("synth").file,
+                    "office",
+                )
                 .expect("building"),
-        );
-        let k = fit_kernel(&b.pilot).expect("fit").kernel;
-        let budget = 0.25 * b.total_edge_length();
-        let p = Problem::new(b.clone(), k, Surveyor::robot(), 0, 0, budget).expect("problem");
-        let s = Surrogate::new(&p).expect("surrogate");
-        let run = Run::new(Control::new(), None);
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let walks: Vec<Vec<usize>> = (0..24)
-            .map(|i| {
-                let spec = Leg {
-                    from: 0,
-                    prev: None,
-                    to: 0,
-                    budget,
-                    radius: [0.0, 0.25, 0.5, 1.0][i % 4] * k.ell,
-                    any_fit: true,
-                    avoid_reversals: false,
-                    open_ties: i % 2 == 1,
-                };
-                leg(&p, &spec, &[], Some(&mut rng), &run)
-            })
-            .collect();
-        let e: Vec<f64> = walks.iter().map(|w| p.utility(w).expect("f_D")).collect();
-        let v: Vec<f64> = walks.iter().map(|w| s.value(w).expect("value")).collect();
-        let mut apart = 0;
-        for i in 0..walks.len() {
-            assert!(
-                (v[i] - e[i]).abs() < 0.1 * e[i],
-                "walk {i}: {} against {}",
-                v[i],
-                e[i]
             );
-            for j in 0..i {
-                if (e[i] - e[j]).abs() > 0.02 * e[i].max(e[j]) {
-                    apart += 1;
-                    assert!(
-                        (v[i] - v[j]) * (e[i] - e[j]) > 0.0,
-                        "walks {i} and {j}: f_D {} and {}, surrogate {} and {}",
-                        e[i],
-                        e[j],
-                        v[i],
-                        v[j]
-                    );
+            let k = fit_kernel(&b.pilot).expect("fit").kernel;
+            let budget = 0.25 * b.total_edge_length();
+            let p = Problem::new(b.clone(), k, Surveyor::robot(), 0, 0, budget).expect("problem");
+            let s = Surrogate::new(&p).expect("surrogate");
+            let run = Run::new(Control::new(), None);
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            let walks: Vec<Vec<usize>> = (0..24)
+                .map(|i| {
+                    let spec = Leg {
+                        from: 0,
+                        prev: None,
+                        to: 0,
+                        budget,
+                        radius: [0.0, 0.25, 0.5, 1.0][i % 4] * k.ell,
+                        any_fit: true,
+                        avoid_reversals: false,
+                        open_ties: i % 2 == 1,
+                    };
+                    leg(&p, &spec, &[], Some(&mut rng), &run)
+                })
+                .collect();
+            let e: Vec<f64> = walks.iter().map(|w| p.utility(w).expect("f_D")).collect();
+            let v: Vec<f64> = walks.iter().map(|w| s.value(w).expect("value")).collect();
+            let mut apart = 0;
+            for i in 0..walks.len() {
+                assert!(
+                    (v[i] - e[i]).abs() < 0.1 * e[i],
+                    "walk {i}: {} against {}",
+                    v[i],
+                    e[i]
+                );
+                for j in 0..i {
+                    if (e[i] - e[j]).abs() > 0.02 * e[i].max(e[j]) {
+                        apart += 1;
+                        assert!(
+                            (v[i] - v[j]) * (e[i] - e[j]) > 0.0,
+                            "walks {i} and {j}: f_D {} and {}, surrogate {} and {}",
+                            e[i],
+                            e[j],
+                            v[i],
+                            v[j]
+                        );
+                    }
                 }
             }
+            assert!(apart >= 50, "only {apart} pairs more than 2% apart");
         }
-        assert!(apart >= 50, "only {apart} pairs more than 2% apart");
     }
 
     fn pts(v: &[(f64, f64)]) -> Vec<(Point, f64)> {
