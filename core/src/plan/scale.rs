@@ -129,7 +129,7 @@ fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
 
 /// The spread construction of a whole walk (start to end, the whole budget), nearest edge
 /// first, avoiding reversals for a person.
-fn whole_walk(p: &Problem) -> Leg {
+pub(in crate::plan) fn whole_walk(p: &Problem) -> Leg {
     Leg {
         from: p.start,
         prev: None,

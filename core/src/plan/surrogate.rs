@@ -472,15 +472,11 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(3);
             let walks: Vec<Vec<usize>> = (0..24)
                 .map(|i| {
+                    // The search's own construction, randomised (start = end = 0).
                     let spec = Leg {
-                        from: 0,
-                        prev: None,
-                        to: 0,
-                        budget,
                         radius: [0.0, 0.25, 0.5, 1.0][i % 4] * k.ell,
-                        any_fit: true,
-                        avoid_reversals: false,
                         open_ties: i % 2 == 1,
+                        ..crate::plan::scale::whole_walk(&p)
                     };
                     leg(&p, &spec, &[], Some(&mut rng), &run)
                 })
