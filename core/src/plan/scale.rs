@@ -47,10 +47,13 @@
 //!    (evaluated exactly) are finalists too: the surrogate may lead on to a walk that is
 //!    worse by `f_D`, and a plan never ends below what its progress has shown. The best
 //!    of them by exact `f_D` is returned, so `auto` never returns less than the systematic walk it is judged
-//!    against (for a person: less the 1% per reversal). The one exception is a time limit
-//!    shorter than a few exact evaluations on one thread (a 2,000 m robot walk on a
-//!    565-vertex building costs about 4 s): then only the finalists the limit affords are
-//!    evaluated, the best construction first.
+//!    against (for a person: less the 1% per reversal). The exception is an exact
+//!    evaluation that is dear beside the time limit (more than [`DEFER_SHARE`] of it,
+//!    estimated by timing a prefix of the walk: a 2,000 m robot walk on a 565-vertex
+//!    building costs 0.73 s here): then nothing is evaluated before the search, which
+//!    gets that time, and the search's walk is the one finalist, evaluated at the end
+//!    (the search stops when the time left is what that evaluation needs, scaled to the
+//!    walk of the moment).
 
 use std::time::{Duration, Instant};
 
@@ -97,6 +100,70 @@ const SEARCH_KEEP: f64 = 0.5;
 fn surrogate_units(p: &Problem) -> f64 {
     let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
     13_000.0 * p.building.len() as f64 + 3_000.0 * n
+}
+
+/// Largest share of the time limit one exact evaluation may take for the finalists to be
+/// evaluated before the search (and the search's walk offered exactly as it improves).
+/// Beyond it they are not: the search's walk is evaluated once, at the end, and the
+/// search gets the time. Mall robot 2,036 m (one exact evaluation 0.73 s on one core
+/// here) had about 0.2 s of search at 2 s otherwise.
+///
+/// Measured at 2 s, one core, seeds 1-4, mean utility: with a share of 0.1 against none,
+/// mall robot 2,036 m 477.86 -> 524.04 nats (+9.7%), the other 17 rows of
+/// `docs/benchmark-scale.md`'s office, campus and mall within -0.9% to +0.6% (mean of
+/// all 18 1.0052); 0.03 against 0.1 (robot rows of campus and mall), mall robot 1,018 m
+/// 362.05 -> 366.49 (+1.2%, an exact evaluation of 0.17 s); 0.01 against 0.03, campus
+/// robot 891 m 312.91 -> 317.61 (+1.5%) and 446 m +0.7%; 0.003 against 0.01, all 18
+/// rows within -0.2% to +1.2% (mean 1.0009). A walk the search has not improved on
+/// (the best construction) is returned without an exact comparison against the
+/// systematic walk: the surrogate ranked the construction above it.
+const DEFER_SHARE: f64 = 0.01;
+
+/// Margin on the estimated time of the deferred final evaluation ([`DEFER_SHARE`]) that
+/// the search leaves before the deadline (besides 50 ms). The estimate itself runs about
+/// 10% high (the prefix's allocation is a larger share of its work): mall robot 1,018 m
+/// 190 ms estimated, 174 ms taken; 2,036 m 830 ms for the construction's 1.35e10
+/// multiply-adds, so 984 ms for the search's walk of 1.60e10, which took 879 ms. With a
+/// margin of 1.15 that plan returned after 1.70 s of its 2 s.
+const DEFER_MARGIN: f64 = 1.05;
+
+/// Multiply-adds per second of the time limit below which a walk's exact evaluation is
+/// cheap on any device this runs on (a phone does a few billion a second, this machine
+/// about 2e10), so [`exact_time_estimate`] does not time one.
+const CHEAP_WORK_PER_SECOND: f64 = 1e8;
+
+/// What one exact evaluation of `walk` costs on this thread, when it may be dear beside
+/// `limit` (`None` when it is certainly cheap, see [`CHEAP_WORK_PER_SECOND`]): the exact
+/// evaluation of the longest prefix of `walk` with at most an eighth of its work
+/// ([`crate::utility::UtilityEngine::utility_work`]), timed and scaled by the ratio of the
+/// two works. Timing the prefix costs an eighth of an evaluation; a model alone would be
+/// off by the device's speed (several times on a phone).
+fn exact_time_estimate(
+    p: &Problem,
+    walk: &[usize],
+    limit: Duration,
+) -> Result<Option<(Duration, f64)>> {
+    let full = p.engine.utility_work(walk)?;
+    if full < CHEAP_WORK_PER_SECOND * limit.as_secs_f64() || walk.len() < 2 {
+        return Ok(None);
+    }
+    // The largest k with work(walk[..k]) <= full / 8 (at least one vertex).
+    let (mut lo, mut hi) = (1usize, walk.len());
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if p.engine.utility_work(&walk[..mid])? <= full / 8.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let prefix = &walk[..lo];
+    let work = p.engine.utility_work(prefix)?.max(1.0);
+    let t0 = Instant::now();
+    p.utility(prefix)?;
+    let t = t0.elapsed();
+    let est = t.mul_f64(full / work);
+    Ok(Some((est, full)))
 }
 
 /// Share of a walk's value that one reversal costs, for a person: a walk that paces back
@@ -202,6 +269,8 @@ pub struct Stats {
     pub exact_from_batch: Option<usize>,
     /// Kicks: moves on from a large rebuild of the best walk after a long stall.
     pub kicks: usize,
+    /// Whether the finalists' exact evaluations were deferred ([`DEFER_SHARE`]).
+    pub deferred: bool,
 }
 
 /// `auto` on a large building (see the module doc). `seed` drives every random choice.
@@ -297,7 +366,27 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         let t0 = Instant::now();
         (p.utility(w), t0.elapsed())
     };
-    let timed: Vec<(Result<f64>, Duration)> = if rayon::current_num_threads() >= fixed.len() {
+    // When one exact evaluation is dear beside the time limit (more than DEFER_SHARE of
+    // it), the finalists are not evaluated before the search: the search gets that time,
+    // and its walk is the one finalist evaluated, at the end (see DEFER_SHARE).
+    let estimate = match run.time_limit() {
+        Some(limit) => exact_time_estimate(p, &cur, limit)?
+            .filter(|(t, _)| t.as_secs_f64() > DEFER_SHARE * limit.as_secs_f64()),
+        None => None,
+    };
+    let deferred: Option<Duration> = estimate.map(|(t, _)| t);
+    stats.deferred = deferred.is_some();
+    // Seconds per multiply-add of an exact evaluation, when deferred: the final
+    // evaluation's time is scaled from it to the search's walk of the moment (one with
+    // fewer coincident samples costs more: mall robot 2,036 m, 1.35e10 for the best
+    // construction, 1.60e10 for the search's walk).
+    let rate = estimate.map(|(t, work)| t.as_secs_f64() / work);
+    if deferred.is_some() {
+        fixed.clear();
+    }
+    let timed: Vec<(Result<f64>, Duration)> = if deferred.is_some() {
+        Vec::new()
+    } else if rayon::current_num_threads() >= fixed.len() {
         fixed.par_iter().map(timed_utility).collect()
     } else {
         // Fewer threads than finalists (one core): the best construction first, then the
@@ -320,10 +409,11 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         out
     };
     fixed.truncate(timed.len());
-    let mut t_exact = Duration::ZERO;
+    // Deferred: the estimate stands for the measurement.
+    let mut t_exact = deferred.unwrap_or_default();
     // The cheapest of them: the first evaluation also builds the engine's lazy state, so
     // the longest overstates what one costs in the search.
-    let mut t_eval: Option<Duration> = None;
+    let mut t_eval: Option<Duration> = deferred;
     let mut fixed_u = Vec::with_capacity(fixed.len());
     for (w, (u, t)) in fixed.iter().zip(timed) {
         let u = u?;
@@ -337,7 +427,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // tenth of it each): the current walk whenever its surrogate value has grown by 1%,
     // so that progress and a cancel show exact figures.
     let limit = run.time_limit().unwrap_or(Duration::from_secs(3600));
-    let exact_offers = t_exact < limit / 10;
+    let exact_offers = t_exact < limit / 10 && deferred.is_none();
     let mut offered_s = cur_s;
     // The best walk of the search evaluated exactly so far (an offered walk): the
     // surrogate may later prefer a walk that is worse by `f_D`, and the plan must never
@@ -348,8 +438,17 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // 2. Large-neighbourhood search until the time left is what the final exact
     //    evaluation of the search's walk needs (measured above, with a margin for a busy
     //    machine), or a bounded number of batches without a time limit.
-    let reserve = t_exact.mul_f64(1.3) + Duration::from_millis(50);
-    let stop_at = run.deadline().map(|d| d.checked_sub(reserve).unwrap_or(d));
+    let reserve = |walk: &[usize]| -> Result<Duration> {
+        Ok(match rate {
+            Some(r) => Duration::from_secs_f64(r * p.engine.utility_work(walk)? * DEFER_MARGIN),
+            None => t_exact.mul_f64(1.3),
+        } + Duration::from_millis(50))
+    };
+    let stop_for = |walk: &[usize]| -> Result<Option<Instant>> {
+        let r = reserve(walk)?;
+        Ok(run.deadline().map(|d| d.checked_sub(r).unwrap_or(d)))
+    };
+    let mut stop_at = stop_for(&cur)?;
     let max_batches = if stop_at.is_some() { usize::MAX } else { 400 };
     // 2b. When exact evaluations are cheap beside the search window (it affords at least
     //     EXACT_PHASE_BATCHES batches of them in its last EXACT_PHASE_SHARE), that last
@@ -510,6 +609,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             cur_s = s;
             (walk, walk_s) = (w, s);
             stats.accepted += 1;
+            if rate.is_some() {
+                stop_at = stop_for(&cur)?;
+            }
             stale = 0;
         } else {
             let frac = match stop_at {
@@ -613,7 +715,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     if let Some(o) = offered {
         finalists.push(o);
     }
-    if cur != first && !cur_known {
+    if (cur != first || deferred.is_some()) && !cur_known {
         let u = p.utility(&cur)?;
         p.offer(run, &cur, u);
         finalists.push((cur, u));
@@ -628,7 +730,8 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             out = Some((w, u, s));
         }
     }
-    // `finalists` always holds the best construction.
+    // `finalists` always holds the best construction, or the search's walk when the
+    // finalists were deferred.
     let (walk, utility, _) = out.expect("at least one finalist");
     let term = if run.out_of_time() {
         Termination::TimeLimit
@@ -913,5 +1016,94 @@ mod tests {
             p.length(&cut)
         );
         assert!(distinct(&cut) > 4, "{cut:?}");
+    }
+
+    /// A 10 x 10 grid of corridors 4 m apart (100 vertices, 720 m of edges), pilot data
+    /// at two corners.
+    fn grid() -> std::sync::Arc<crate::building::Building> {
+        let mut v = Vec::new();
+        let mut e = Vec::new();
+        for r in 0..10 {
+            for c in 0..10 {
+                v.push(format!(
+                    r#"{{"id":"g{r}-{c}","x":{},"y":{}}}"#,
+                    4 * c,
+                    4 * r
+                ));
+                if c > 0 {
+                    e.push(format!(r#"{{"a":"g{r}-{}","b":"g{r}-{c}"}}"#, c - 1));
+                }
+                if r > 0 {
+                    e.push(format!(r#"{{"a":"g{}-{c}","b":"g{r}-{c}"}}"#, r - 1));
+                }
+            }
+        }
+        let text = format!(
+            r#"{{"format":"survey-building/1","name":"grid","vertices":[{}],"edges":[{}],
+               "pilot":[{{"x":0,"y":0,"rss":{{"a":-50}}}},{{"x":36,"y":36,"rss":{{"a":-70}}}}]}}"#,
+            v.join(","),
+            e.join(",")
+        );
+        std::sync::Arc::new(crate::building::Building::from_json(&text, "grid").expect("valid"))
+    }
+
+    fn grid_problem(budget: f64) -> Problem {
+        let k = crate::gp::Kernel {
+            sf2: 10.0,
+            ell: 6.0,
+            sn2: 0.5,
+        };
+        Problem::new(grid(), k, Surveyor::robot(), 0, 0, budget).expect("problem")
+    }
+
+    #[test]
+    fn the_exact_time_is_estimated_only_where_it_may_be_dear() {
+        let p = grid_problem(300.0);
+        let run = Run::new(Control::new(), None);
+        let walk = leg(&p, &whole_walk(&p), &[], None, &run);
+        // About 700 rows (600 samples and 100 vertices): 5.7e7 multiply-adds, cheap on
+        // any device beside a minute, worth timing beside 0.1 s.
+        let work = p.engine.utility_work(&walk).expect("work");
+        assert!(
+            work > 1e7 && work < 60.0 * CHEAP_WORK_PER_SECOND,
+            "{work:e}"
+        );
+        let never = exact_time_estimate(&p, &walk, Duration::from_secs(60)).expect("estimate");
+        assert!(never.is_none(), "{never:?}");
+        let (t, w) = exact_time_estimate(&p, &walk, Duration::from_millis(100))
+            .expect("estimate")
+            .expect("timed");
+        assert_eq!(w, work);
+        assert!(t > Duration::ZERO && t < Duration::from_secs(5), "{t:?}");
+        // The work grows with the samples: a walk of half the budget is well under half.
+        let half = grid_problem(150.0);
+        let short = leg(&half, &whole_walk(&half), &[], None, &run);
+        let w2 = p.engine.utility_work(&short).expect("work");
+        assert!(w2 < 0.5 * work, "{w2:e} against {work:e}");
+    }
+
+    #[test]
+    fn a_deferred_plan_evaluates_only_its_final_walk_and_reports_it_exactly() {
+        // 50 ms: one exact evaluation of a 300 m robot walk here (about 700 rows) takes
+        // far more than 1% of it on any device, so the finalists are deferred.
+        let p = grid_problem(300.0);
+        let run = Run::new(Control::new(), Some(Duration::from_millis(50)));
+        let (out, stats) = plan_large(&p, &run, 2).expect("plan");
+        assert!(stats.deferred, "{stats:?}");
+        p.check(&out.walk).expect("feasible");
+        assert!(
+            p.length(&out.walk) >= 0.95 * 300.0,
+            "{} m",
+            p.length(&out.walk)
+        );
+        let exact = p.utility(&out.walk).expect("utility");
+        assert!((exact - out.utility).abs() <= 1e-9 * exact);
+        // The one walk offered is the one returned.
+        let (w, u) = run.incumbent().expect("offered");
+        assert_eq!(w, out.walk);
+        assert_eq!(u, out.utility);
+        // Without a time limit nothing depends on a clock: nothing is deferred.
+        let (_, stats) = plan_large(&p, &Run::new(Control::new(), None), 2).expect("plan");
+        assert!(!stats.deferred);
     }
 }
