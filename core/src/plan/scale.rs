@@ -62,7 +62,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::coverage::{Leg, leg, reversals, unpace};
-pub use super::surrogate::Surrogate;
+pub use super::surrogate::{Frame, Surrogate};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::Result;
 use crate::samples::Surveyor;
@@ -500,6 +500,11 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // `drift` worse than it (record-to-record travel), the drift shrinking to nothing
     // over the search window.
     let (mut walk, mut walk_s) = (cur.clone(), cur_s);
+    // The surrogate's frame of `walk`: a move's candidate is scored by the vertices its
+    // changed stretch comes near ([`Surrogate::value_near`]), a 25th to a 35th of a whole
+    // evaluation on the mall. A candidate the search would move to is scored whole
+    // before it does, so every score it keeps (`cur_s`, `walk_s`) is a whole walk's.
+    let mut frame: Option<Frame> = None;
     let search_start = Instant::now();
     while stats.batches < max_batches && !run.should_stop() {
         if stop_at.is_some_and(|t| Instant::now() >= t) {
@@ -563,18 +568,27 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
                 }
             })
             .collect();
+        let by_surrogate = !exact_phase || screened;
+        if by_surrogate && frame.as_ref().is_none_or(|f| f.walk() != walk.as_slice()) {
+            frame = Some(sur.frame(&walk)?);
+            stats.surrogate_evals += 1;
+        }
+        let fr = frame.as_ref();
         // (walk, score, exact utility when the score is exact)
         let cands: Vec<(Vec<usize>, f64, Option<f64>)> = moves
             .par_iter()
             .filter_map(|m| {
                 let w = m.apply(p, &walk, human, run);
-                if exact_phase && !screened {
-                    let u = p.utility(&w).ok()?;
-                    let sc = penalised(p, &w, u);
-                    Some((w, sc, Some(u)))
-                } else {
-                    let sc = score(p, &sur, &w).ok()?;
-                    Some((w, sc, None))
+                match fr {
+                    Some(f) if by_surrogate => {
+                        let sc = penalised(p, &w, sur.value_near(f, &w).ok()?);
+                        Some((w, sc, None))
+                    }
+                    _ => {
+                        let u = p.utility(&w).ok()?;
+                        let sc = penalised(p, &w, u);
+                        Some((w, sc, Some(u)))
+                    }
                 }
             })
             .collect();
@@ -596,6 +610,26 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             *u = Some(x);
             *sc = penalised(p, w, x);
         }
+        let frac = match stop_at {
+            Some(t) => {
+                let total = t.saturating_duration_since(search_start).as_secs_f64();
+                search_start.elapsed().as_secs_f64() / total.max(1e-9)
+            }
+            None => stats.batches as f64 / max_batches.min(400) as f64,
+        };
+        let drift = DRIFT * (1.0 - frac).max(0.0);
+        // A candidate scored by `value_near` that the search would accept or move to is
+        // scored whole first (its frame is then the next batch's).
+        let mut next_frame: Option<Frame> = None;
+        if let Some((w, sc, None)) = best.as_mut()
+            && (*sc > cur_s * (1.0 + 1e-9)
+                || (*w != walk && (*sc > walk_s * (1.0 + 1e-9) || *sc >= cur_s * (1.0 - drift))))
+        {
+            let f = sur.frame(w)?;
+            stats.surrogate_evals += 1;
+            *sc = penalised(p, w, f.value());
+            next_frame = Some(f);
+        }
         if let Some((w, s, u)) = best.clone()
             && s > cur_s * (1.0 + 1e-9)
         {
@@ -614,14 +648,6 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             }
             stale = 0;
         } else {
-            let frac = match stop_at {
-                Some(t) => {
-                    let total = t.saturating_duration_since(search_start).as_secs_f64();
-                    search_start.elapsed().as_secs_f64() / total.max(1e-9)
-                }
-                None => stats.batches as f64 / max_batches.min(400) as f64,
-            };
-            let drift = DRIFT * (1.0 - frac).max(0.0);
             // A person's walk drifts only to walks with no more reversals than the best
             // one: the score's 1% per reversal is smaller than the drift, and a search
             // that drifts through reversals ends with them (office, 201 m: 1.5 per 100 m
@@ -662,6 +688,11 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
                     stats.kicks += 1;
                 }
             }
+        }
+        if let Some(f) = next_frame
+            && f.walk() == walk.as_slice()
+        {
+            frame = Some(f);
         }
         if !exact_phase
             && exact_offers

@@ -112,6 +112,12 @@ impl Surrogate {
     /// The surrogate value of a walk: an approximation of `f_D` in nats, for ranking
     /// walks of one problem.
     pub fn value(&self, walk: &[usize]) -> Result<f64> {
+        Ok(self.frame(walk)?.value)
+    }
+
+    /// The surrogate value of `walk` with what it does not depend on kept ([`Frame`]),
+    /// for scoring walks that differ from it in one stretch ([`Surrogate::value_near`]).
+    pub fn frame(&self, walk: &[usize]) -> Result<Frame> {
         let samples = sample_walk(&self.building, walk, &self.model, &self.kernel)?;
         let mut obs = self.fixed.clone();
         obs.extend(
@@ -124,78 +130,357 @@ impl Surrogate {
         floors.sort_unstable();
         floors.dedup();
         let trees: Vec<(i64, Tree)> = floors.iter().map(|&f| (f, Tree::new(&obs, f))).collect();
-        Ok(self.prior - self.half_log_vars(&obs, &trees))
+        let mut scratch = Scratch::new();
+        let mut knn = Knn::new(self.obs_k);
+        let mut near = Vec::with_capacity(self.building.len());
+        let mut total = 0.0;
+        for (i, v) in self.building.vertices.iter().enumerate() {
+            knn.clear();
+            if let Some((_, t)) = trees.iter().find(|(f, _)| *f == v.pos.floor) {
+                t.nearest(v.pos.x, v.pos.y, [NOTHING; 2], 0, &mut knn);
+            }
+            let set = knn.items().iter().map(|&(_, j)| obs[j as usize]);
+            let term = self.term(i, set, &mut scratch);
+            total += term;
+            near.push(Near::new(&knn, term));
+        }
+        Ok(Frame {
+            walk: walk.to_vec(),
+            arcs: vertex_arcs(&self.building, walk),
+            sample_arcs: samples.iter().map(|s| s.arc).collect(),
+            fixed: self.fixed.len(),
+            obs,
+            trees,
+            near,
+            total,
+            value: self.prior - total,
+        })
     }
 
-    /// `sum_i 1/2 ln Var(y_vi | earlier neighbours, nearest observations)`.
+    /// The surrogate value of `walk`, a walk that shares a first and a last stretch with
+    /// the frame's walk (a move of the search): only the vertices whose nearest
+    /// observations change are conditioned again.
+    ///
+    /// The samples of the shared first stretch are the frame's exactly; those of the
+    /// changed stretch are `walk`'s own; those of the shared last stretch are taken as the
+    /// frame's, though in `walk` they lie up to one sample spacing further on or back
+    /// (samples are placed by arc length from the start) and a person's label noise there
+    /// may differ after a changed turn. Where the changed stretch has the frame's length
+    /// the value is [`Surrogate::value`]'s for the robot, to rounding and to the choice
+    /// among observations at the same distance from a vertex.
+    pub fn value_near(&self, frame: &Frame, walk: &[usize]) -> Result<f64> {
+        let base = &frame.walk;
+        let (nb, nw) = (base.len(), walk.len());
+        let a = base.iter().zip(walk).take_while(|(x, y)| x == y).count();
+        if a == nb && a == nw {
+            return Ok(frame.value);
+        }
+        let z = base
+            .iter()
+            .rev()
+            .zip(walk.iter().rev())
+            .take_while(|(x, y)| x == y)
+            .count()
+            .min(nb.min(nw) - a);
+        if a == 0 {
+            // Not a walk from the frame's start: nothing is shared.
+            return self.value(walk);
+        }
+        // The changed stretches run from vertex a - 1 to vertex n - z of each walk, or,
+        // where the two middles share a run of vertices (a move that cuts an excursion
+        // in one place and rebuilds a stretch in another), from vertex a - 1 to the
+        // run's start and from its end to vertex n - z.
+        let shared = longest_common_run(&base[a..nb - z], &walk[a..nw - z]);
+        let (rb, rw): (Stretches, Stretches) = match shared {
+            Some((sb, sw, len)) if len >= MIN_SHARED_RUN => (
+                [(a - 1, a + sb), (a + sb + len - 1, nb - z)],
+                [(a - 1, a + sw), (a + sw + len - 1, nw - z)],
+            ),
+            _ => ([(a - 1, nb - z), (0, 0)], [(a - 1, nw - z), (0, 0)]),
+        };
+        let samples = sample_walk(&self.building, walk, &self.model, &self.kernel)?;
+        let arcs = vertex_arcs(&self.building, walk);
+        // Samples strictly inside a stretch (by arc length; those at its end vertices
+        // are the shared ones).
+        const EPS: f64 = 1e-6;
+        let inside = |sample_arcs: &dyn Fn(f64, bool) -> usize, from: f64, to: f64| {
+            let lo = sample_arcs(from + EPS, true);
+            (lo, sample_arcs(to - EPS, false).max(lo))
+        };
+        let base_at = |x: f64, le: bool| {
+            frame
+                .sample_arcs
+                .partition_point(|&s| if le { s <= x } else { s < x })
+        };
+        let walk_at =
+            |x: f64, le: bool| samples.partition_point(|s| if le { s.arc <= x } else { s.arc < x });
+        let mut skip = [NOTHING; 2];
+        let mut added: Vec<(Point, f64)> = Vec::new();
+        for k in 0..2 {
+            let ((b0, b1), (w0, w1)) = (rb[k], rw[k]);
+            if b1 > b0 {
+                let (lo, hi) = inside(&base_at, frame.arcs[b0], frame.arcs[b1]);
+                skip[k] = ((frame.fixed + lo) as u32, (frame.fixed + hi) as u32);
+            }
+            if w1 > w0 {
+                let (lo, hi) = inside(&walk_at, arcs[w0], arcs[w1]);
+                added.extend(
+                    samples[lo..hi]
+                        .iter()
+                        .map(|s| (s.pos, self.kernel.sn2 + s.extra_noise)),
+                );
+            }
+        }
+        // The added samples' extent and tree per floor, for a quick test of which
+        // vertices they may come near.
+        let mut floors: Vec<i64> = added.iter().map(|(q, _)| q.floor).collect();
+        floors.sort_unstable();
+        floors.dedup();
+        let boxes: Vec<(i64, [f64; 4], Tree)> = floors
+            .iter()
+            .map(|&f| {
+                let mut b = [
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                ];
+                for (q, _) in added.iter().filter(|(q, _)| q.floor == f) {
+                    b = [b[0].min(q.x), b[1].max(q.x), b[2].min(q.y), b[3].max(q.y)];
+                }
+                (f, b, Tree::new(&added, f))
+            })
+            .collect();
+        let mut scratch = Scratch::new();
+        let mut knn = Knn::new(self.obs_k);
+        let mut one = Knn::new(1);
+        let mut total = frame.total;
+        let base_ids = frame.obs.len() as u32;
+        for (i, v) in self.building.vertices.iter().enumerate() {
+            let nv = &frame.near[i];
+            let here = boxes.iter().find(|(f, b, _)| {
+                *f == v.pos.floor && {
+                    let dx = (b[0] - v.pos.x).max(v.pos.x - b[1]).max(0.0);
+                    let dy = (b[2] - v.pos.y).max(v.pos.y - b[3]).max(0.0);
+                    dx * dx + dy * dy < nv.r2
+                }
+            });
+            let lost = nv
+                .ids()
+                .iter()
+                .any(|&j| skip.iter().any(|&(lo, hi)| j >= lo && j < hi));
+            let gained = !lost
+                && here.is_some_and(|(_, _, t)| {
+                    one.clear();
+                    t.nearest(v.pos.x, v.pos.y, [NOTHING; 2], 0, &mut one);
+                    one.bound() < nv.r2
+                });
+            if !lost && !gained {
+                continue;
+            }
+            knn.clear();
+            if let Some((_, t)) = frame.trees.iter().find(|(f, _)| *f == v.pos.floor) {
+                t.nearest(v.pos.x, v.pos.y, skip, 0, &mut knn);
+            }
+            if let Some((_, _, t)) = boxes.iter().find(|(f, _, _)| *f == v.pos.floor) {
+                t.nearest(v.pos.x, v.pos.y, [NOTHING; 2], base_ids, &mut knn);
+            }
+            let set = knn.items().iter().map(|&(_, j)| {
+                if j < base_ids {
+                    frame.obs[j as usize]
+                } else {
+                    added[(j - base_ids) as usize]
+                }
+            });
+            total += self.term(i, set, &mut scratch) - nv.term;
+        }
+        Ok(self.prior - total)
+    }
+
+    /// `1/2 ln Var(y_vi | earlier neighbours, set)` for the observations `set`, nearest
+    /// first.
     ///
     /// The conditioning set of `v_i` lists its earlier neighbours first, so the leading
     /// block of the Cholesky factor, which does not depend on the walk, is the one
     /// [`Surrogate::with`] stored; only the rows of the observations are computed here.
-    fn half_log_vars(&self, obs: &[(Point, f64)], trees: &[(i64, Tree)]) -> f64 {
+    fn term(&self, i: usize, set: impl Iterator<Item = (Point, f64)>, sc: &mut Scratch) -> f64 {
         let k = &self.kernel;
-        let mut total = 0.0;
-        let mut set: Vec<(Point, f64)> = Vec::with_capacity(MAX_SET);
+        let v = &self.building.vertices[i];
+        let pv = &self.vertex_part[i];
+        let q = pv.prev.len();
+        let lp = &pv.factor;
+        sc.set.clear();
+        sc.set.extend(set);
+        let (l, z, set) = (&mut sc.l, &mut sc.z, &sc.set);
+        z[..q].copy_from_slice(&pv.z);
+        let mut var = pv.var;
         // Rows of the observations: `row[t][..q + t + 1]` of the factor, `q` earlier
         // vertices first.
-        let mut l = [0.0f64; MAX_SET * MAX_SET];
-        let mut z = [0.0f64; MAX_SET];
-        let mut near = Knn::new(self.obs_k);
-        for (i, v) in self.building.vertices.iter().enumerate() {
-            let pv = &self.vertex_part[i];
-            let q = pv.prev.len();
-            let lp = &pv.factor;
-            z[..q].copy_from_slice(&pv.z);
-            let mut var = pv.var;
-            set.clear();
-            if let Some((_, t)) = trees.iter().find(|(f, _)| *f == v.pos.floor) {
-                near.clear();
-                t.nearest(v.pos.x, v.pos.y, &mut near);
-                set.extend(near.items().iter().map(|&(_, j)| obs[j as usize]));
+        let m = q + set.len();
+        for (t, o) in set.iter().enumerate() {
+            let r = q + t;
+            let row = r * m;
+            for c in 0..q {
+                l[row + c] = cov(k, &o.0, &self.building.vertices[pv.prev[c] as usize].pos);
             }
-            let m = q + set.len();
-            for (t, o) in set.iter().enumerate() {
-                let r = q + t;
-                let row = r * m;
-                for c in 0..q {
-                    l[row + c] = cov(k, &o.0, &self.building.vertices[pv.prev[c] as usize].pos);
-                }
-                for c in 0..t {
-                    l[row + q + c] = cov(k, &o.0, &set[c].0);
-                }
-                l[row + r] = k.sf2 + o.1;
-                // Row r of the factor: columns before q against the stored block, the
-                // rest against the rows just computed.
-                for c in 0..=r {
-                    let mut x = l[row + c];
-                    if c < q {
-                        for u in 0..c {
-                            x -= l[row + u] * lp[c * q + u];
-                        }
-                        l[row + c] = x / lp[c * q + c];
+            for c in 0..t {
+                l[row + q + c] = cov(k, &o.0, &set[c].0);
+            }
+            l[row + r] = k.sf2 + o.1;
+            // Row r of the factor: columns before q against the stored block, the rest
+            // against the rows just computed.
+            for c in 0..=r {
+                let mut x = l[row + c];
+                if c < q {
+                    for u in 0..c {
+                        x -= l[row + u] * lp[c * q + u];
+                    }
+                    l[row + c] = x / lp[c * q + c];
+                } else {
+                    for u in 0..c {
+                        x -= l[row + u] * l[c * m + u];
+                    }
+                    if c == r {
+                        // Positive definite (noise on the diagonal); guard rounding.
+                        l[row + r] = x.max(1e-12 * k.sf2).sqrt();
                     } else {
-                        for u in 0..c {
-                            x -= l[row + u] * l[c * m + u];
-                        }
-                        if c == r {
-                            // Positive definite (noise on the diagonal); guard rounding.
-                            l[row + r] = x.max(1e-12 * k.sf2).sqrt();
-                        } else {
-                            l[row + c] = x / l[c * m + c];
-                        }
+                        l[row + c] = x / l[c * m + c];
                     }
                 }
-                let mut x = cov(k, &o.0, &v.pos);
-                for u in 0..r {
-                    x -= l[row + u] * z[u];
-                }
-                z[r] = x / l[row + r];
-                var -= z[r] * z[r];
             }
-            total += 0.5 * var.max(1e-12 * k.sn2).ln();
+            let mut x = cov(k, &o.0, &v.pos);
+            for u in 0..r {
+                x -= l[row + u] * z[u];
+            }
+            z[r] = x / l[row + r];
+            var -= z[r] * z[r];
         }
-        total
+        0.5 * var.max(1e-12 * k.sn2).ln()
     }
+}
+
+/// What [`Surrogate::frame`] keeps of a walk: its observations and their trees, and each
+/// vertex's nearest observations and term.
+#[derive(Debug)]
+pub struct Frame {
+    walk: Vec<usize>,
+    /// Arc length at each vertex of the walk.
+    arcs: Vec<f64>,
+    /// Arc length of each sample of the walk.
+    sample_arcs: Vec<f64>,
+    /// Observations before the samples in `obs` (pilot and prior).
+    fixed: usize,
+    obs: Vec<(Point, f64)>,
+    trees: Vec<(i64, Tree)>,
+    near: Vec<Near>,
+    /// Sum of the vertices' terms.
+    total: f64,
+    value: f64,
+}
+
+impl Frame {
+    /// The walk's surrogate value ([`Surrogate::value`]).
+    pub fn value(&self) -> f64 {
+        self.value
+    }
+
+    /// The walk.
+    pub fn walk(&self) -> &[usize] {
+        &self.walk
+    }
+}
+
+/// One vertex's nearest observations in a [`Frame`] (indices into its `obs`), the squared
+/// distance a new observation must beat to be among them, and its term.
+#[derive(Debug, Clone, Copy)]
+struct Near {
+    ids: [u32; 16],
+    len: u8,
+    r2: f64,
+    term: f64,
+}
+
+impl Near {
+    fn new(knn: &Knn, term: f64) -> Self {
+        let mut ids = [0u32; 16];
+        for (d, &(_, j)) in ids.iter_mut().zip(knn.items()) {
+            *d = j;
+        }
+        Near {
+            ids,
+            len: knn.items().len() as u8,
+            r2: knn.bound(),
+            term,
+        }
+    }
+
+    fn ids(&self) -> &[u32] {
+        &self.ids[..self.len as usize]
+    }
+}
+
+/// Working space of [`Surrogate::term`].
+struct Scratch {
+    set: Vec<(Point, f64)>,
+    l: Box<[f64; MAX_SET * MAX_SET]>,
+    z: [f64; MAX_SET],
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Scratch {
+            set: Vec::with_capacity(MAX_SET),
+            l: Box::new([0.0; MAX_SET * MAX_SET]),
+            z: [0.0; MAX_SET],
+        }
+    }
+}
+
+/// Arc length from the start at each vertex of `walk`.
+fn vertex_arcs(b: &Building, walk: &[usize]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(walk.len());
+    let mut arc = 0.0;
+    out.push(0.0);
+    for w in walk.windows(2) {
+        arc += b.walk_length(w);
+        out.push(arc);
+    }
+    out
+}
+
+/// Up to two changed stretches of a walk, as (first, last) vertex positions; `(0, 0)` is
+/// none.
+type Stretches = [(usize, usize); 2];
+
+/// An empty range of observation indices: nothing skipped.
+const NOTHING: (u32, u32) = (0, 0);
+
+/// Shortest run of vertices two changed middles must share for [`Surrogate::value_near`]
+/// to keep its samples.
+const MIN_SHARED_RUN: usize = 3;
+
+/// The longest run of consecutive vertices that `a` and `b` share: `(start in a, start in
+/// b, length)`, the first such run of `a` on ties; `None` when they share no vertex or
+/// are too long to compare cheaply.
+fn longest_common_run(a: &[usize], b: &[usize]) -> Option<(usize, usize, usize)> {
+    if a.is_empty() || b.is_empty() || a.len() * b.len() > 1 << 18 {
+        return None;
+    }
+    // run[j + 1]: the length of the common run ending at a[i], b[j].
+    let mut prev = vec![0u32; b.len() + 1];
+    let mut run = vec![0u32; b.len() + 1];
+    let mut best = (0, 0, 0);
+    for (i, x) in a.iter().enumerate() {
+        for (j, y) in b.iter().enumerate() {
+            run[j + 1] = if x == y { prev[j] + 1 } else { 0 };
+            let len = run[j + 1] as usize;
+            if len > best.2 {
+                best = (i + 1 - len, j + 1 - len, len);
+            }
+        }
+        std::mem::swap(&mut prev, &mut run);
+    }
+    (best.2 > 0).then_some(best)
 }
 
 /// `k(a, b)` of SPEC 2 (what [`Kernel::k`] computes, with a plain square root instead of
@@ -338,6 +623,7 @@ impl Knn {
 
 /// A 2-d tree of the observations of one floor: `nodes` is a balanced tree stored in
 /// place (each slice's median is its root, split alternately by x and y).
+#[derive(Debug)]
 struct Tree {
     nodes: Vec<([f64; 2], u32)>,
 }
@@ -354,8 +640,10 @@ impl Tree {
         Tree { nodes }
     }
 
-    fn nearest(&self, x: f64, y: f64, out: &mut Knn) {
-        search(&self.nodes, 0, [x, y], out);
+    /// The nearest observations to `(x, y)` into `out`, leaving out the indices in
+    /// the ranges `skip`, with `offset` added to every index offered.
+    fn nearest(&self, x: f64, y: f64, skip: [(u32, u32); 2], offset: u32, out: &mut Knn) {
+        search(&self.nodes, 0, [x, y], (skip, offset), out);
     }
 }
 
@@ -373,27 +661,39 @@ fn build(nodes: &mut [([f64; 2], u32)], axis: usize) {
     build(&mut hi[1..], 1 - axis);
 }
 
-fn search(nodes: &[([f64; 2], u32)], axis: usize, q: [f64; 2], out: &mut Knn) {
+fn search(
+    nodes: &[([f64; 2], u32)],
+    axis: usize,
+    q: [f64; 2],
+    ids: ([(u32, u32); 2], u32),
+    out: &mut Knn,
+) {
+    let ([(lo, hi), (lo2, hi2)], offset) = ids;
+    let kept = |j: u32| (j < lo || j >= hi) && (j < lo2 || j >= hi2);
     if nodes.len() <= LEAF {
         for &(p, j) in nodes {
-            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
-            out.offer(dx * dx + dy * dy, j);
+            if kept(j) {
+                let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+                out.offer(dx * dx + dy * dy, j + offset);
+            }
         }
         return;
     }
     let mid = nodes.len() / 2;
     let (p, j) = nodes[mid];
-    let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
-    out.offer(dx * dx + dy * dy, j);
+    if kept(j) {
+        let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+        out.offer(dx * dx + dy * dy, j + offset);
+    }
     let diff = q[axis] - p[axis];
     let (near, far) = if diff < 0.0 {
         (&nodes[..mid], &nodes[mid + 1..])
     } else {
         (&nodes[mid + 1..], &nodes[..mid])
     };
-    search(near, 1 - axis, q, out);
+    search(near, 1 - axis, q, ids, out);
     if diff * diff < out.bound() {
-        search(far, 1 - axis, q, out);
+        search(far, 1 - axis, q, ids, out);
     }
 }
 
@@ -434,6 +734,95 @@ mod tests {
                 "walk {w:?}: surrogate {approx}, f_D {exact}"
             );
         }
+    }
+
+    /// The lattice of `coverage::tests::lattice` with uneven column and row spacings: the
+    /// two ways around a cell are still equally long, but few observations are at the
+    /// same distance from a vertex (on the even lattice many are, and which of them a
+    /// vertex takes is arbitrary).
+    fn uneven() -> Arc<Building> {
+        let (xs, ys) = ([0.0, 2.1, 4.3, 6.2], [0.0, 2.3, 4.9]);
+        let mut v = Vec::new();
+        let mut e = Vec::new();
+        for (r, &y) in ys.iter().enumerate() {
+            for (c, &x) in xs.iter().enumerate() {
+                v.push(format!(r#"{{"id":"v{r}{c}","x":{x},"y":{y}}}"#));
+                if c > 0 {
+                    e.push(format!(r#"{{"a":"v{r}{}","b":"v{r}{c}"}}"#, c - 1));
+                }
+                if r > 0 {
+                    e.push(format!(r#"{{"a":"v{}{c}","b":"v{r}{c}"}}"#, r - 1));
+                }
+            }
+        }
+        let text = format!(
+            r#"{{"format":"survey-building/1","name":"jit","vertices":[{}],"edges":[{}],
+               "pilot":[{{"x":0.3,"y":0.1,"rss":{{"a":-50}}}}]}}"#,
+            v.join(","),
+            e.join(",")
+        );
+        Arc::new(Building::from_json(&text, "jit").expect("valid"))
+    }
+
+    #[test]
+    fn a_walk_near_the_frames_is_scored_as_a_whole_walk_would_be() {
+        let b = uneven();
+        let p = problem(&b, 40.0);
+        let s = Surrogate::new(&p).expect("surrogate");
+        let base = [0, 1, 2, 6, 10, 9, 8, 4, 0];
+        let frame = s.frame(&base).expect("frame");
+        assert_eq!(frame.value(), s.value(&base).expect("value"));
+        assert_eq!(s.value_near(&frame, &base).expect("same"), frame.value());
+        // 1 -> 5 -> 6 instead of 1 -> 2 -> 6: the same length, so every sample after the
+        // change is where the frame has it, and the value is the whole walk's.
+        let same_length = [0, 1, 5, 6, 10, 9, 8, 4, 0];
+        let (near, whole) = (
+            s.value_near(&frame, &same_length).expect("near"),
+            s.value(&same_length).expect("whole"),
+        );
+        assert!(
+            (near - whole).abs() <= 1e-9 * whole,
+            "{near} against {whole}"
+        );
+        assert!(
+            (near - frame.value()).abs() > 1e-3,
+            "the change must matter"
+        );
+        // A longer detour moves the later samples by less than a spacing: close, not equal.
+        let longer = [0, 1, 5, 9, 10, 6, 7, 11, 10, 9, 8, 4, 0];
+        let (near, whole) = (
+            s.value_near(&frame, &longer).expect("near"),
+            s.value(&longer).expect("whole"),
+        );
+        assert!(
+            (near - whole).abs() <= 0.02 * whole,
+            "{near} against {whole}"
+        );
+        // Two changes with a shared run between them (6, 10, 9), each of the same
+        // length: two changed stretches, the samples between them kept.
+        let twice = [0, 1, 5, 6, 10, 9, 5, 4, 0];
+        assert_eq!(
+            longest_common_run(&base[2..7], &twice[2..7]),
+            Some((1, 1, 3))
+        );
+        let (near, whole) = (
+            s.value_near(&frame, &twice).expect("near"),
+            s.value(&twice).expect("whole"),
+        );
+        assert!(
+            (near - whole).abs() <= 1e-9 * whole,
+            "{near} against {whole}"
+        );
+        // A change at the very end.
+        let end = [0, 1, 2, 6, 10, 9, 5, 4, 0];
+        let (near, whole) = (
+            s.value_near(&frame, &end).expect("near"),
+            s.value(&end).expect("whole"),
+        );
+        assert!(
+            (near - whole).abs() <= 1e-9 * whole,
+            "{near} against {whole}"
+        );
     }
 
     /// Needs the building generator (`research` feature, on by default).
@@ -527,7 +916,7 @@ mod tests {
         for _ in 0..200 {
             let (x, y) = (rnd(), rnd());
             let mut a = Knn::new(6);
-            t.nearest(x, y, &mut a);
+            t.nearest(x, y, [NOTHING; 2], 0, &mut a);
             let mut b = Knn::new(6);
             for (j, o) in obs.iter().enumerate() {
                 b.offer((o.0.x - x).powi(2) + (o.0.y - y).powi(2), j as u32);
@@ -544,7 +933,7 @@ mod tests {
         obs.push((Point::new(0.0, 0.0, 1), 1.0));
         let t = Tree::new(&obs, 1);
         let mut k = Knn::new(3);
-        t.nearest(0.0, 0.0, &mut k);
+        t.nearest(0.0, 0.0, [NOTHING; 2], 0, &mut k);
         assert_eq!(k.items(), &[(0.0, 2)]);
     }
 }
