@@ -175,6 +175,9 @@ impl Surrogate {
         if a == nb && a == nw {
             return Ok(frame.value);
         }
+        // One walk may run on from the other's end (a loop added at the end): the last
+        // shared vertex is then also the first of the shared last stretch.
+        let a = a.min(nb.min(nw) - 1);
         let z = base
             .iter()
             .rev()
@@ -182,8 +185,8 @@ impl Surrogate {
             .take_while(|(x, y)| x == y)
             .count()
             .min(nb.min(nw) - a);
-        if a == 0 {
-            // Not a walk from the frame's start: nothing is shared.
+        if a == 0 || z == 0 {
+            // Not a walk from the frame's start to its end: nothing is shared.
             return self.value(walk);
         }
         // The changed stretches run from vertex a - 1 to vertex n - z of each walk, or,
@@ -813,6 +816,28 @@ mod tests {
             (near - whole).abs() <= 1e-9 * whole,
             "{near} against {whole}"
         );
+        // A loop added after the frame's walk ends, and one taken away: one walk runs on
+        // from the other's end.
+        let on: Vec<usize> = base.iter().copied().chain([1, 0]).collect();
+        for (f, w) in [
+            (&frame, &on[..]),
+            (&s.frame(&on).expect("frame"), &base[..]),
+        ] {
+            let (near, whole) = (
+                s.value_near(f, w).expect("near"),
+                s.value(w).expect("whole"),
+            );
+            assert!(
+                (near - whole).abs() <= 0.02 * whole,
+                "{near} against {whole}"
+            );
+        }
+        // A walk to another end shares nothing at the end: scored whole.
+        let elsewhere = [0, 1, 2, 6, 10, 9, 8];
+        assert_eq!(
+            s.value_near(&frame, &elsewhere).expect("near"),
+            s.value(&elsewhere).expect("whole")
+        );
         // A change at the very end.
         let end = [0, 1, 2, 6, 10, 9, 5, 4, 0];
         let (near, whole) = (
@@ -823,6 +848,43 @@ mod tests {
             (near - whole).abs() <= 1e-9 * whole,
             "{near} against {whole}"
         );
+    }
+
+    #[test]
+    fn any_two_walks_score_near_each_other_without_failing() {
+        // Random walks on the uneven lattice, each scored from the frame of another: every
+        // shape of overlap (none, prefix only, one walk running on from the other's end,
+        // several changed stretches) must give a value.
+        use rand::{RngExt, SeedableRng};
+        let b = uneven();
+        let p = problem(&b, 60.0);
+        let s = Surrogate::new(&p).expect("surrogate");
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let walk = |rng: &mut rand_chacha::ChaCha8Rng| {
+            let mut w = vec![0usize];
+            for _ in 0..rng.random_range(0..14) {
+                let nb = b.neighbours(*w.last().expect("walk"));
+                w.push(nb[rng.random_range(0..nb.len())].0);
+            }
+            w
+        };
+        let walks: Vec<Vec<usize>> = (0..40).map(|_| walk(&mut rng)).collect();
+        for f in walks.iter().take(8) {
+            let frame = s.frame(f).expect("frame");
+            for w in &walks {
+                let (near, whole) = (
+                    s.value_near(&frame, w).expect("near"),
+                    s.value(w).expect("whole"),
+                );
+                // Unrelated walks share little, and what they share sits up to a
+                // spacing off: a sanity bound, not the search's accuracy (see
+                // examples/surrogate_near.rs for that).
+                assert!(
+                    near.is_finite() && (near - whole).abs() <= 0.5 * whole.abs().max(1.0),
+                    "{f:?} then {w:?}: {near} against {whole}"
+                );
+            }
+        }
     }
 
     /// Needs the building generator (`research` feature, on by default).
