@@ -177,20 +177,23 @@ fn midpoint(b: &crate::building::Building, a: usize, c: usize) -> Point {
     }
 }
 
-/// State of a construction: which edges are walked, which are within the radius of a
-/// walked one.
-struct Marks<'a> {
+/// State of a construction: how often each edge is walked, and how many walked edges
+/// each edge is within the radius of (itself included). Counts rather than flags, so that
+/// a search can take a walk's marks and remove the steps of the stretch it rebuilds
+/// ([`Marks::unwalk_all`]) instead of marking the rest of the walk again.
+#[derive(Debug, Clone)]
+pub(in crate::plan) struct Marks<'a> {
     p: &'a Problem,
-    walked: Vec<bool>,
-    near: Vec<bool>,
+    walked: Vec<u32>,
+    near: Vec<u32>,
     /// The problem's table when it answers for `radius`, else `mids` for a scan.
     table: Option<&'a NearEdges>,
-    mids: Vec<Point>,
+    mids: std::sync::Arc<Vec<Point>>,
     radius: f64,
 }
 
 impl<'a> Marks<'a> {
-    fn new(p: &'a Problem, radius: f64) -> Self {
+    pub(in crate::plan) fn new(p: &'a Problem, radius: f64) -> Self {
         let b = &p.building;
         let table = if radius > 0.0 {
             p.near_edges().filter(|t| radius <= t.cap())
@@ -204,46 +207,86 @@ impl<'a> Marks<'a> {
         };
         Marks {
             p,
-            walked: vec![false; b.edges.len()],
-            near: vec![false; b.edges.len()],
+            walked: vec![0; b.edges.len()],
+            near: vec![0; b.edges.len()],
             table,
-            mids,
+            mids: std::sync::Arc::new(mids),
             radius,
         }
     }
 
-    /// Marks the edge from `u` to its neighbour `v` as walked.
-    fn walk_step(&mut self, u: usize, v: usize) {
-        let b = &self.p.building;
-        let Some(&(_, e)) = b.neighbours(u).iter().find(|&&(w, _)| w == v) else {
-            return;
-        };
-        if self.walked[e] {
-            return;
-        }
-        self.walked[e] = true;
-        self.near[e] = true;
+    /// The novelty radius these marks are for.
+    pub(in crate::plan) fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    fn is_walked(&self, e: usize) -> bool {
+        self.walked[e] > 0
+    }
+
+    fn is_near(&self, e: usize) -> bool {
+        self.near[e] > 0
+    }
+
+    /// Adds `by` (1 or -1) to the near count of every edge within the radius of `e`.
+    fn add_near(&mut self, u: usize, v: usize, e: usize, by: i32) {
+        let step = |x: &mut u32| *x = x.wrapping_add_signed(by);
+        step(&mut self.near[e]);
         if let Some(t) = self.table {
             for k in t.within(e, self.radius) {
-                self.near[k] = true;
+                step(&mut self.near[k]);
             }
         } else if self.radius > 0.0 {
+            let b = &self.p.building;
             let (pa, pb) = (&b.vertices[u].pos, &b.vertices[v].pos);
             for (k, m) in self.mids.iter().enumerate() {
-                if !self.near[k]
-                    && (m.floor == pa.floor || m.floor == pb.floor)
+                if (m.floor == pa.floor || m.floor == pb.floor)
                     && m.segment_projection(pa, pb).1 <= self.radius
                 {
-                    self.near[k] = true;
+                    step(&mut self.near[k]);
                 }
             }
         }
     }
 
+    /// Marks the edge from `u` to its neighbour `v` as walked (once more).
+    fn walk_step(&mut self, u: usize, v: usize) {
+        let b = &self.p.building;
+        let Some(&(_, e)) = b.neighbours(u).iter().find(|&&(w, _)| w == v) else {
+            return;
+        };
+        self.walked[e] += 1;
+        if self.walked[e] == 1 {
+            self.add_near(u, v, e, 1);
+        }
+    }
+
+    /// Takes back one [`Marks::walk_step`] from `u` to `v` (or from `v` to `u`).
+    fn unwalk_step(&mut self, u: usize, v: usize) {
+        let b = &self.p.building;
+        let Some(&(_, e)) = b.neighbours(u).iter().find(|&&(w, _)| w == v) else {
+            return;
+        };
+        if self.walked[e] == 0 {
+            return;
+        }
+        self.walked[e] -= 1;
+        if self.walked[e] == 0 {
+            self.add_near(u, v, e, -1);
+        }
+    }
+
     /// Marks every step of `walk[from..]` as walked.
-    fn walk_all(&mut self, walk: &[usize], from: usize) {
+    pub(in crate::plan) fn walk_all(&mut self, walk: &[usize], from: usize) {
         for i in from.max(1)..walk.len() {
             self.walk_step(walk[i - 1], walk[i]);
+        }
+    }
+
+    /// Takes back every step of `walk` ([`Marks::unwalk_step`]).
+    pub(in crate::plan) fn unwalk_all(&mut self, walk: &[usize]) {
+        for w in walk.windows(2) {
+            self.unwalk_step(w[0], w[1]);
         }
     }
 }
@@ -297,14 +340,27 @@ pub fn leg(
     p: &Problem,
     spec: &Leg,
     context: &[usize],
+    rng: Option<&mut rand_chacha::ChaCha8Rng>,
+    run: &Run,
+) -> Vec<usize> {
+    let mut marks = Marks::new(p, spec.radius);
+    marks.walk_all(context, 1);
+    leg_marked(p, spec, marks, rng, run)
+}
+
+/// [`leg`] with the rest of the walk given as its marks (for `spec.radius`) instead of
+/// its vertices.
+pub(in crate::plan) fn leg_marked(
+    p: &Problem,
+    spec: &Leg,
+    mut marks: Marks,
     mut rng: Option<&mut rand_chacha::ChaCha8Rng>,
     run: &Run,
 ) -> Vec<usize> {
     use rand::RngExt;
     let b = &p.building;
     let m = &p.metric;
-    let mut marks = Marks::new(p, spec.radius);
-    marks.walk_all(context, 1);
+    debug_assert_eq!(marks.radius(), spec.radius);
     let mut walk = vec![spec.from];
     let mut len = 0.0;
     let mut cur = spec.from;
@@ -326,12 +382,12 @@ pub fn leg(
         let open = |marks: &Marks, v: usize| {
             b.neighbours(v)
                 .iter()
-                .filter(|&&(_, e)| !marks.walked[e])
+                .filter(|&&(_, e)| !marks.is_walked(e))
                 .count()
         };
         let mut pool: Vec<(usize, usize, usize)> = Vec::new();
         for (e, ed) in b.edges.iter().enumerate() {
-            if marks.walked[e] {
+            if marks.is_walked(e) {
                 continue;
             }
             let (da, db) = (m.dist(cur, ed.a), m.dist(cur, ed.b));
@@ -343,7 +399,7 @@ pub fn leg(
             if !reach.is_finite() {
                 continue;
             }
-            let mut class = usize::from(marks.near[e]);
+            let mut class = usize::from(marks.is_near(e));
             if spec.avoid_reversals
                 && !dead_end
                 && let Some(pv) = prev
@@ -567,7 +623,7 @@ pub(super) mod tests {
             if budget >= 2.0 * total {
                 let mut marks = Marks::new(&p, 0.0);
                 marks.walk_all(&w, 1);
-                assert!(marks.walked.iter().all(|&x| x), "every edge walked");
+                assert!(marks.walked.iter().all(|&x| x > 0), "every edge walked");
             }
         }
     }

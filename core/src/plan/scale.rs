@@ -61,7 +61,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::coverage::{Leg, leg, reversals, unpace};
+use super::coverage::{Leg, Marks, leg, leg_marked, reversals, unpace};
 pub use super::surrogate::{Frame, Surrogate};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::Result;
@@ -505,6 +505,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // evaluation on the mall. A candidate the search would move to is scored whole
     // before it does, so every score it keeps (`cur_s`, `walk_s`) is a whole walk's.
     let mut frame: Option<Frame> = None;
+    // `walk`'s marks for each radius of `radii` (built when a move first needs them).
+    let mut marks: Vec<Option<Marks>> = vec![None; radii.len()];
+    let mut marks_of: Option<Vec<usize>> = None;
     let search_start = Instant::now();
     while stats.batches < max_batches && !run.should_stop() {
         if stop_at.is_some_and(|t| Instant::now() >= t) {
@@ -573,12 +576,27 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             frame = Some(sur.frame(&walk)?);
             stats.surrogate_evals += 1;
         }
+        // The walk's marks for each radius a move of this batch takes.
+        if marks_of.as_deref() != Some(walk.as_slice()) {
+            marks.iter_mut().for_each(|m| *m = None);
+            marks_of = Some(walk.clone());
+        }
+        for m in &moves {
+            let k = radii.iter().position(|&r| r == m.radius).unwrap_or(0);
+            if marks[k].is_none() {
+                let mut mk = Marks::new(p, radii[k]);
+                mk.walk_all(&walk, 1);
+                marks[k] = Some(mk);
+            }
+        }
         let fr = frame.as_ref();
         // (walk, score, exact utility when the score is exact)
         let cands: Vec<(Vec<usize>, f64, Option<f64>)> = moves
             .par_iter()
             .filter_map(|m| {
-                let w = m.apply(p, &walk, human, run);
+                let k = radii.iter().position(|&r| r == m.radius);
+                let mk = k.and_then(|k| marks[k].as_ref());
+                let w = m.apply_marked(p, &walk, mk, human, run);
                 match fr {
                     Some(f) if by_surrogate => {
                         let sc = penalised(p, &w, sur.value_near(f, &w).ok()?);
@@ -851,15 +869,58 @@ struct Move {
 
 impl Move {
     fn apply(&self, p: &Problem, walk: &[usize], human: bool, run: &Run) -> Vec<usize> {
-        match self.cut {
+        self.apply_marked(p, walk, None, human, run)
+    }
+
+    /// [`Move::apply`], given `walk`'s marks for the move's radius when the caller has
+    /// them: the rebuilt stretch's context is then those marks less the steps the move
+    /// removes, instead of every other step of the walk marked again.
+    fn apply_marked(
+        &self,
+        p: &Problem,
+        walk: &[usize],
+        marks: Option<&Marks>,
+        human: bool,
+        run: &Run,
+    ) -> Vec<usize> {
+        let mut marks = marks.cloned();
+        let cut;
+        let w = match self.cut {
             Some((a, b)) => {
+                if let Some(m) = marks.as_mut() {
+                    m.unwalk_all(&walk[a..=b]);
+                }
                 let mut w = walk[..=a].to_vec();
                 w.extend_from_slice(&walk[b + 1..]);
-                rebuild(p, &w, self.i, self.j, self.radius, human, self.seed, run)
+                cut = w;
+                &cut
             }
-            None => rebuild(p, walk, self.i, self.j, self.radius, human, self.seed, run),
+            None => walk,
+        };
+        if let Some(m) = marks.as_mut() {
+            m.unwalk_all(&w[self.i..=self.j]);
         }
+        let spec = Rebuild {
+            i: self.i,
+            j: self.j,
+            radius: self.radius,
+            human,
+            seed: self.seed,
+        };
+        rebuild(p, w, &spec, marks, run)
     }
+}
+
+/// What [`rebuild`] rebuilds: the stretch `i..=j` of a walk, by a randomised spread leg of
+/// novelty radius `radius` (its tie rule drawn from `seed`), avoiding reversals for a
+/// person (`human`).
+#[derive(Debug, Clone, Copy)]
+struct Rebuild {
+    i: usize,
+    j: usize,
+    radius: f64,
+    human: bool,
+    seed: u64,
 }
 
 /// A closed excursion of `walk`, `(a, b)` with `a < b - 1` and `walk[a] == walk[b]`,
@@ -887,27 +948,27 @@ fn excursion(walk: &[usize], rng: &mut ChaCha8Rng) -> Option<(usize, usize)> {
     None
 }
 
-/// `walk` with its stretch `walk[i..=j]` rebuilt by a randomised spread leg of novelty
-/// radius `radius` that counts the rest of the walk as walked and uses the budget left
-/// (its tie rule, [`Leg::open_ties`], drawn from `seed`).
-#[allow(clippy::too_many_arguments)]
+/// `walk` with its stretch `walk[spec.i..=spec.j]` rebuilt by a randomised spread leg
+/// that counts the rest of the walk as walked and uses the budget left (its tie rule,
+/// [`Leg::open_ties`], drawn from the seed). `marks`: the rest of the walk's marks for
+/// the radius, when the caller has them.
 fn rebuild(
     p: &Problem,
     walk: &[usize],
-    i: usize,
-    j: usize,
-    radius: f64,
-    human: bool,
-    seed: u64,
+    spec: &Rebuild,
+    marks: Option<Marks>,
     run: &Run,
 ) -> Vec<usize> {
+    let &Rebuild {
+        i,
+        j,
+        radius,
+        human,
+        seed,
+    } = spec;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (head, tail) = (&walk[..=i], &walk[j..]);
     let fixed = p.length(head) + p.length(tail);
-    let mut context: Vec<usize> = head.to_vec();
-    // The tail counts as walked too; joined through a break that marks no edge.
-    let mut ctx_tail = tail.to_vec();
-    context.append(&mut ctx_tail);
     let spec = Leg {
         from: walk[i],
         prev: i.checked_sub(1).map(|k| walk[k]),
@@ -919,7 +980,16 @@ fn rebuild(
         // Either tie rule, by a fair coin of the move's own seed.
         open_ties: seed & 1 == 1,
     };
-    let mid = leg(p, &spec, &context, Some(&mut rng), run);
+    let mid = match marks {
+        Some(m) => leg_marked(p, &spec, m, Some(&mut rng), run),
+        None => {
+            // The tail counts as walked too, joined to the head through a step that
+            // marks the edge between them, if there is one.
+            let mut context: Vec<usize> = head.to_vec();
+            context.extend_from_slice(tail);
+            leg(p, &spec, &context, Some(&mut rng), run)
+        }
+    };
     let mut out = head.to_vec();
     out.extend_from_slice(&mid[1..]);
     out.extend_from_slice(&tail[1..]);
