@@ -13,18 +13,18 @@
 //! (`Surrogate::with`: each vertex conditioned on `OBS` observations and `VERTICES`
 //! earlier vertices) beside the search's own.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use trailprint::building::Building;
 use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
 use trailprint::surveyor::Surveyor;
-use trailprint::synth::{SynthParams, generate};
+
+#[path = "common/cases.rs"]
+mod cases;
 
 fn ranks(v: &[f64]) -> Vec<f64> {
     let mut idx: Vec<usize> = (0..v.len()).collect();
@@ -78,25 +78,13 @@ fn main() -> trailprint::Result<()> {
     } else {
         Surveyor::robot()
     };
-    let cases = [
-        ("campus", 2usize, 6usize, 48.0, 8.0),
-        ("mall", 1, 12, 120.0, 12.0),
-    ];
     println!(
         "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | mean relative error | surrogate ms | exact ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
-    for (name, floors, rooms, corridor, depth) in cases {
-        let params = SynthParams {
-            name: name.into(),
-            floors,
-            rooms_per_side: rooms,
-            corridor_length_m: corridor,
-            room_depth_m: depth,
-            ..SynthParams::default()
-        };
-        let synth = generate(&params)?;
-        let b = Arc::new(Building::from_file(synth.file, name)?);
+    for case in cases::CASES {
+        let name = case.0;
+        let b = cases::building(case)?;
         let kernel = fit_kernel(&b.pilot)?.kernel;
         let total = b.total_edge_length();
         for frac in [0.25, 0.5] {

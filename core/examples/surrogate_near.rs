@@ -13,18 +13,18 @@
 //! moves whose whole changes differ by more than 0.2 nats that `value_near` orders the
 //! same way, how many moves improve by each, and the time per evaluation of both.
 
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use trailprint::building::Building;
 use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
 use trailprint::surveyor::Surveyor;
-use trailprint::synth::{SynthParams, generate};
+
+#[path = "common/cases.rs"]
+mod cases;
 
 fn main() -> trailprint::Result<()> {
     let human = std::env::args().any(|a| a == "human");
@@ -37,19 +37,9 @@ fn main() -> trailprint::Result<()> {
         "| building | model | budget | moves | mean abs change | mean abs error | pairs >0.2 nats apart ordered alike | improving (whole / both / near only) | near us | whole us |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for (name, floors, rooms, corridor, depth) in [
-        ("campus", 2usize, 6usize, 48.0, 8.0),
-        ("mall", 1, 12, 120.0, 12.0),
-    ] {
-        let params = SynthParams {
-            name: name.into(),
-            floors,
-            rooms_per_side: rooms,
-            corridor_length_m: corridor,
-            room_depth_m: depth,
-            ..SynthParams::default()
-        };
-        let b = Arc::new(Building::from_file(generate(&params)?.file, name)?);
+    for case in cases::CASES {
+        let name = case.0;
+        let b = cases::building(case)?;
         let kernel = fit_kernel(&b.pilot)?.kernel;
         for frac in [0.25, 0.5, 1.0] {
             let budget = frac * b.total_edge_length();

@@ -579,11 +579,17 @@ pub(super) mod tests {
 
     /// A 4 x 3 lattice of 2 m cells (vertex `4 r + c` at `(2 c, 2 r)`).
     pub(in crate::plan) fn lattice() -> Arc<Building> {
+        lattice_at([0.0, 2.0, 4.0, 6.0], [0.0, 2.0, 4.0])
+    }
+
+    /// A 4 x 3 lattice with columns at `xs` and rows at `ys` (vertex `4 r + c` at
+    /// `(xs[c], ys[r])`), pilot data at the origin.
+    pub(in crate::plan) fn lattice_at(xs: [f64; 4], ys: [f64; 3]) -> Arc<Building> {
         let mut v = Vec::new();
         let mut e = Vec::new();
-        for r in 0..3 {
-            for c in 0..4 {
-                v.push(format!(r#"{{"id":"v{r}{c}","x":{},"y":{}}}"#, 2 * c, 2 * r));
+        for (r, &y) in ys.iter().enumerate() {
+            for (c, &x) in xs.iter().enumerate() {
+                v.push(format!(r#"{{"id":"v{r}{c}","x":{x},"y":{y}}}"#));
                 if c > 0 {
                     e.push(format!(r#"{{"a":"v{r}{}","b":"v{r}{c}"}}"#, c - 1));
                 }

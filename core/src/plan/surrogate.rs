@@ -702,7 +702,7 @@ fn search(
 
 #[cfg(test)]
 mod tests {
-    use super::super::coverage::tests::{lattice, problem};
+    use super::super::coverage::tests::{lattice, lattice_at, problem};
     use super::*;
 
     #[test]
@@ -744,27 +744,7 @@ mod tests {
     /// same distance from a vertex (on the even lattice many are, and which of them a
     /// vertex takes is arbitrary).
     fn uneven() -> Arc<Building> {
-        let (xs, ys) = ([0.0, 2.1, 4.3, 6.2], [0.0, 2.3, 4.9]);
-        let mut v = Vec::new();
-        let mut e = Vec::new();
-        for (r, &y) in ys.iter().enumerate() {
-            for (c, &x) in xs.iter().enumerate() {
-                v.push(format!(r#"{{"id":"v{r}{c}","x":{x},"y":{y}}}"#));
-                if c > 0 {
-                    e.push(format!(r#"{{"a":"v{r}{}","b":"v{r}{c}"}}"#, c - 1));
-                }
-                if r > 0 {
-                    e.push(format!(r#"{{"a":"v{}{c}","b":"v{r}{c}"}}"#, r - 1));
-                }
-            }
-        }
-        let text = format!(
-            r#"{{"format":"survey-building/1","name":"jit","vertices":[{}],"edges":[{}],
-               "pilot":[{{"x":0.3,"y":0.1,"rss":{{"a":-50}}}}]}}"#,
-            v.join(","),
-            e.join(",")
-        );
-        Arc::new(Building::from_json(&text, "jit").expect("valid"))
+        lattice_at([0.0, 2.1, 4.3, 6.2], [0.0, 2.3, 4.9])
     }
 
     #[test]
@@ -776,31 +756,26 @@ mod tests {
         let frame = s.frame(&base).expect("frame");
         assert_eq!(frame.value(), s.value(&base).expect("value"));
         assert_eq!(s.value_near(&frame, &base).expect("same"), frame.value());
+        // `walk` scored from `f` is within `tol` (relative) of its whole value, which it
+        // returns.
+        let close = |f: &Frame, walk: &[usize], tol: f64| {
+            let near = s.value_near(f, walk).expect("near");
+            let whole = s.value(walk).expect("whole");
+            assert!(
+                (near - whole).abs() <= tol * whole,
+                "{walk:?}: {near} against {whole}"
+            );
+            near
+        };
         // 1 -> 5 -> 6 instead of 1 -> 2 -> 6: the same length, so every sample after the
         // change is where the frame has it, and the value is the whole walk's.
-        let same_length = [0, 1, 5, 6, 10, 9, 8, 4, 0];
-        let (near, whole) = (
-            s.value_near(&frame, &same_length).expect("near"),
-            s.value(&same_length).expect("whole"),
-        );
-        assert!(
-            (near - whole).abs() <= 1e-9 * whole,
-            "{near} against {whole}"
-        );
+        let near = close(&frame, &[0, 1, 5, 6, 10, 9, 8, 4, 0], 1e-9);
         assert!(
             (near - frame.value()).abs() > 1e-3,
             "the change must matter"
         );
         // A longer detour moves the later samples by less than a spacing: close, not equal.
-        let longer = [0, 1, 5, 9, 10, 6, 7, 11, 10, 9, 8, 4, 0];
-        let (near, whole) = (
-            s.value_near(&frame, &longer).expect("near"),
-            s.value(&longer).expect("whole"),
-        );
-        assert!(
-            (near - whole).abs() <= 0.02 * whole,
-            "{near} against {whole}"
-        );
+        close(&frame, &[0, 1, 5, 9, 10, 6, 7, 11, 10, 9, 8, 4, 0], 0.02);
         // Two changes with a shared run between them (6, 10, 9), each of the same
         // length: two changed stretches, the samples between them kept.
         let twice = [0, 1, 5, 6, 10, 9, 5, 4, 0];
@@ -808,46 +783,16 @@ mod tests {
             longest_common_run(&base[2..7], &twice[2..7]),
             Some((1, 1, 3))
         );
-        let (near, whole) = (
-            s.value_near(&frame, &twice).expect("near"),
-            s.value(&twice).expect("whole"),
-        );
-        assert!(
-            (near - whole).abs() <= 1e-9 * whole,
-            "{near} against {whole}"
-        );
+        close(&frame, &twice, 1e-9);
         // A loop added after the frame's walk ends, and one taken away: one walk runs on
         // from the other's end.
         let on: Vec<usize> = base.iter().copied().chain([1, 0]).collect();
-        for (f, w) in [
-            (&frame, &on[..]),
-            (&s.frame(&on).expect("frame"), &base[..]),
-        ] {
-            let (near, whole) = (
-                s.value_near(f, w).expect("near"),
-                s.value(w).expect("whole"),
-            );
-            assert!(
-                (near - whole).abs() <= 0.02 * whole,
-                "{near} against {whole}"
-            );
-        }
+        close(&frame, &on, 0.02);
+        close(&s.frame(&on).expect("frame"), &base, 0.02);
         // A walk to another end shares nothing at the end: scored whole.
-        let elsewhere = [0, 1, 2, 6, 10, 9, 8];
-        assert_eq!(
-            s.value_near(&frame, &elsewhere).expect("near"),
-            s.value(&elsewhere).expect("whole")
-        );
+        close(&frame, &[0, 1, 2, 6, 10, 9, 8], 0.0);
         // A change at the very end.
-        let end = [0, 1, 2, 6, 10, 9, 5, 4, 0];
-        let (near, whole) = (
-            s.value_near(&frame, &end).expect("near"),
-            s.value(&end).expect("whole"),
-        );
-        assert!(
-            (near - whole).abs() <= 1e-9 * whole,
-            "{near} against {whole}"
-        );
+        close(&frame, &[0, 1, 2, 6, 10, 9, 5, 4, 0], 1e-9);
     }
 
     #[test]

@@ -855,6 +855,11 @@ impl UtilityEngine {
 
     /// `f_D(P)` of a walk of vertex indices. All samples are added in one blocked batch.
     pub fn utility(&self, walk: &[usize]) -> Result<f64> {
+        self.dense_utility(&self.walk_observations(walk)?)
+    }
+
+    /// The samples of `walk` as (position, extra noise).
+    fn walk_observations(&self, walk: &[usize]) -> Result<Vec<(Point, f64)>> {
         if let Some(&v) = walk.iter().find(|&&v| v >= self.building.len()) {
             return Err(Error::InvalidWalk {
                 step: 0,
@@ -862,8 +867,7 @@ impl UtilityEngine {
             });
         }
         let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
-        let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
-        self.dense_utility(&obs)
+        Ok(samples.iter().map(|s| (s.pos, s.extra_noise)).collect())
     }
 
     /// Multiply-adds of [`UtilityEngine::utility`]'s factorisations for `walk` (about
@@ -871,15 +875,7 @@ impl UtilityEngine {
     /// measured evaluation time to another walk: a search that cannot afford an exact
     /// evaluation early on times a shorter walk and scales by this.
     pub fn utility_work(&self, walk: &[usize]) -> Result<f64> {
-        if let Some(&v) = walk.iter().find(|&&v| v >= self.building.len()) {
-            return Err(Error::InvalidWalk {
-                step: 0,
-                message: format!("vertex index {v} out of range"),
-            });
-        }
-        let samples = crate::samples::sample_walk(&self.building, walk, &self.model, &self.kernel)?;
-        let obs: Vec<(Point, f64)> = samples.iter().map(|s| (s.pos, s.extra_noise)).collect();
-        let merged = merge_coincident(&obs, self.kernel.sn2);
+        let merged = merge_coincident(&self.walk_observations(walk)?, self.kernel.sn2);
         let cube = |x: usize| (x as f64).powi(3) / 6.0;
         Ok(self
             .parts
