@@ -21,7 +21,6 @@ use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
-use trailprint::surveyor::Surveyor;
 
 #[path = "common/cases.rs"]
 mod cases;
@@ -65,7 +64,7 @@ fn timed_values(
 }
 
 fn main() -> trailprint::Result<()> {
-    let human = std::env::args().any(|a| a == "human");
+    let (human, model) = cases::model_from_args();
     // Other surrogates to measure beside the search's own: `OBS:VERTICES` arguments.
     let others: Vec<(usize, usize)> = std::env::args()
         .filter_map(|a| {
@@ -73,11 +72,6 @@ fn main() -> trailprint::Result<()> {
             Some((c.parse().ok()?, s.parse().ok()?))
         })
         .collect();
-    let model = if human {
-        Surveyor::human()
-    } else {
-        Surveyor::robot()
-    };
     println!(
         "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | mean relative error | surrogate ms | exact ms |"
     );

@@ -21,18 +21,12 @@ use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
-use trailprint::surveyor::Surveyor;
 
 #[path = "common/cases.rs"]
 mod cases;
 
 fn main() -> trailprint::Result<()> {
-    let human = std::env::args().any(|a| a == "human");
-    let model = if human {
-        Surveyor::human()
-    } else {
-        Surveyor::robot()
-    };
+    let (human, model) = cases::model_from_args();
     println!(
         "| building | model | budget | moves | mean abs change | mean abs error | pairs >0.2 nats apart ordered alike | improving (whole / both / near only) | near us | whole us |"
     );

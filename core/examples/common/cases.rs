@@ -4,7 +4,19 @@
 use std::sync::Arc;
 
 use trailprint::building::Building;
+use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
+
+/// Who walks: the human model when an argument says `human`, else the robot.
+pub fn model_from_args() -> (bool, Surveyor) {
+    let human = std::env::args().any(|a| a == "human");
+    let model = if human {
+        Surveyor::human()
+    } else {
+        Surveyor::robot()
+    };
+    (human, model)
+}
 
 /// (name, floors, rooms per side, corridor length m, room depth m).
 pub const CASES: [(&str, usize, usize, f64, f64); 2] =
