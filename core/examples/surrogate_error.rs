@@ -17,7 +17,6 @@ use std::time::Instant;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
@@ -72,14 +71,20 @@ fn main() -> trailprint::Result<()> {
             Some((c.parse().ok()?, s.parse().ok()?))
         })
         .collect();
-    println!(
-        "| building | surrogate | model | budget | walks | Spearman | concordant pairs | concordant pairs >2% apart | mean relative error | surrogate ms | exact ms |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
-    for case in cases::CASES {
-        let name = case.0;
-        let b = cases::building(case)?;
-        let kernel = fit_kernel(&b.pilot)?.kernel;
+    cases::table_head(&[
+        "building",
+        "surrogate",
+        "model",
+        "budget",
+        "walks",
+        "Spearman",
+        "concordant pairs",
+        "concordant pairs >2% apart",
+        "mean relative error",
+        "surrogate ms",
+        "exact ms",
+    ]);
+    for (name, b, kernel) in cases::fitted()? {
         let total = b.total_edge_length();
         for frac in [0.25, 0.5] {
             let budget = frac * total;

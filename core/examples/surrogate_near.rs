@@ -17,7 +17,6 @@ use std::time::{Duration, Instant};
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use trailprint::gp::fit_kernel;
 use trailprint::plan::coverage::{Leg, leg};
 use trailprint::plan::scale::Surrogate;
 use trailprint::plan::{Control, Problem, Run};
@@ -27,14 +26,19 @@ mod cases;
 
 fn main() -> trailprint::Result<()> {
     let (human, model) = cases::model_from_args();
-    println!(
-        "| building | model | budget | moves | mean abs change | mean abs error | pairs >0.2 nats apart ordered alike | improving (whole / both / near only) | near us | whole us |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    for case in cases::CASES {
-        let name = case.0;
-        let b = cases::building(case)?;
-        let kernel = fit_kernel(&b.pilot)?.kernel;
+    cases::table_head(&[
+        "building",
+        "model",
+        "budget",
+        "moves",
+        "mean abs change",
+        "mean abs error",
+        "pairs >0.2 nats apart ordered alike",
+        "improving (whole / both / near only)",
+        "near us",
+        "whole us",
+    ]);
+    for (name, b, kernel) in cases::fitted()? {
         for frac in [0.25, 0.5, 1.0] {
             let budget = frac * b.total_edge_length();
             let p = Problem::new(b.clone(), kernel, model, 0, 0, budget)?;

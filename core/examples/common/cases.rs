@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use trailprint::building::Building;
+use trailprint::gp::{Kernel, fit_kernel};
 use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
 
@@ -37,4 +38,22 @@ pub fn building(case: (&str, usize, usize, f64, f64)) -> trailprint::Result<Arc<
         generate(&params)?.file,
         name,
     )?))
+}
+
+/// Every building of [`CASES`] with its name and the kernel fitted on its pilot data.
+pub fn fitted() -> trailprint::Result<Vec<(&'static str, Arc<Building>, Kernel)>> {
+    CASES
+        .iter()
+        .map(|&case| {
+            let b = building(case)?;
+            let kernel = fit_kernel(&b.pilot)?.kernel;
+            Ok((case.0, b, kernel))
+        })
+        .collect()
+}
+
+/// Prints the head of a Markdown table with these columns.
+pub fn table_head(columns: &[&str]) {
+    println!("| {} |", columns.join(" | "));
+    println!("|{}", "---|".repeat(columns.len()));
 }
