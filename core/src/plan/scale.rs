@@ -126,11 +126,11 @@ fn surrogate_units(p: &Problem) -> f64 {
 const DEFER_SHARE: f64 = 0.01;
 
 /// Margin on the estimated time of the deferred final evaluation ([`DEFER_SHARE`]) that
-/// the search leaves before the deadline (besides 50 ms). The estimate itself runs about
-/// 10% high (the prefix's allocation is a larger share of its work): mall robot 1,018 m
-/// 190 ms estimated, 174 ms taken; 2,036 m 830 ms for the construction's 1.35e10
-/// multiply-adds, so 984 ms for the search's walk of 1.60e10, which took 879 ms. With a
-/// margin of 1.15 that plan returned after 1.70 s of its 2 s.
+/// the search leaves before the deadline (besides 50 ms). The estimate is within about
+/// 10% either way (one core here: huge-3k person 3,116 m 250 ms estimated, 268 ms taken;
+/// 6,232 m 542 and 565 ms; mall robot 2,036 m 763 and 739 ms, 1,018 m 160 and 163 ms;
+/// campus robot 891 m 31 and 24 ms). With a margin of 1.15 and the earlier estimate,
+/// mall robot 2,036 m returned after 1.70 s of its 2 s.
 const DEFER_MARGIN: f64 = 1.05;
 
 /// Multiply-adds per second of the time limit below which a walk's exact evaluation is
@@ -138,38 +138,90 @@ const DEFER_MARGIN: f64 = 1.05;
 /// about 2e10), so [`exact_time_estimate`] does not time one.
 const CHEAP_WORK_PER_SECOND: f64 = 1e8;
 
+/// What one exact evaluation costs on this thread: a fixed part (copying the prior's
+/// factor, the kernel rows) and a part per multiply-add of its factorisations
+/// ([`crate::utility::UtilityEngine::utility_work`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ExactCost {
+    fixed: f64,
+    per_work: f64,
+}
+
+impl ExactCost {
+    /// The line through two timed evaluations `(work, seconds)`, the second the larger,
+    /// when they make one with a positive slope and a fixed part that is not negative;
+    /// else the second's rate alone, as if nothing were fixed (timing noise, or a first
+    /// evaluation slowed by growing its buffers), which overstates the time of a larger
+    /// evaluation rather than understating it.
+    fn through((w1, t1): (f64, f64), (w2, t2): (f64, f64)) -> Self {
+        let slope = (t2 - t1) / (w2 - w1);
+        if w2 > w1 && slope > 0.0 && t1 - slope * w1 >= 0.0 {
+            ExactCost {
+                fixed: t1 - slope * w1,
+                per_work: slope,
+            }
+        } else {
+            ExactCost {
+                fixed: 0.0,
+                per_work: t2 / w2,
+            }
+        }
+    }
+
+    /// Seconds for an evaluation of `work` multiply-adds.
+    fn time(&self, work: f64) -> Duration {
+        Duration::from_secs_f64(self.fixed + self.per_work * work)
+    }
+}
+
 /// What one exact evaluation of `walk` costs on this thread, when it may be dear beside
-/// `limit` (`None` when it is certainly cheap, see [`CHEAP_WORK_PER_SECOND`]): the exact
-/// evaluation of the longest prefix of `walk` with at most an eighth of its work
-/// ([`crate::utility::UtilityEngine::utility_work`]), timed and scaled by the ratio of the
-/// two works. Timing the prefix costs an eighth of an evaluation; a model alone would be
-/// off by the device's speed (several times on a phone).
+/// `limit` (`None` when it is certainly cheap, see [`CHEAP_WORK_PER_SECOND`]): the
+/// estimated time and the cost model it comes from. Two prefixes of `walk`, with about a
+/// 64th and a quarter of its work, are evaluated and timed, and the line through the two
+/// points gives the fixed part and the part per multiply-add; timing them costs about
+/// 27% of an evaluation. A model alone would be off by the device's speed (several times
+/// on a phone). Measured here, one core (time of prefixes of 1/64 to all of the work):
+/// the time per multiply-add falls with the work on the generated 3,161-vertex floor
+/// (huge-3k, person 3,116 m: 63 ms for 1/64 of the work, 268 ms for all of it: the fixed
+/// part is copying the prior's factor of 3,161 vertices), is flat on the campus (robot
+/// 891 m, 4.3e-11 s throughout) and rises by a third between 1/8 and 1/4 of the work on
+/// mall robot 1,018 m (the matrix outgrows the cache). So the larger prefix is a quarter,
+/// past that step. One prefix of an eighth scaled by the ratio of the works (how this was
+/// estimated before) counted the fixed part eight times: huge-3k person 3,116 m, 702 ms
+/// estimated against 272 ms taken, which left its 2 s plan no search at all.
 fn exact_time_estimate(
     p: &Problem,
     walk: &[usize],
     limit: Duration,
-) -> Result<Option<(Duration, f64)>> {
+) -> Result<Option<(Duration, ExactCost)>> {
     let full = p.engine.utility_work(walk)?;
-    if full < CHEAP_WORK_PER_SECOND * limit.as_secs_f64() || walk.len() < 2 {
+    if full < CHEAP_WORK_PER_SECOND * limit.as_secs_f64() || walk.len() < 3 {
         return Ok(None);
     }
-    // The largest k with work(walk[..k]) <= full / 8 (at least one vertex).
-    let (mut lo, mut hi) = (1usize, walk.len());
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if p.engine.utility_work(&walk[..mid])? <= full / 8.0 {
-            lo = mid;
-        } else {
-            hi = mid;
+    // The largest k with work(walk[..k]) <= target (at least one vertex).
+    let prefix_for = |target: f64| -> Result<usize> {
+        let (mut lo, mut hi) = (1usize, walk.len());
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if p.engine.utility_work(&walk[..mid])? <= target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
-    }
-    let prefix = &walk[..lo];
-    let work = p.engine.utility_work(prefix)?.max(1.0);
-    let t0 = Instant::now();
-    p.utility(prefix)?;
-    let t = t0.elapsed();
-    let est = t.mul_f64(full / work);
-    Ok(Some((est, full)))
+        Ok(lo)
+    };
+    let timed = |k: usize| -> Result<(f64, f64)> {
+        let prefix = &walk[..k];
+        let work = p.engine.utility_work(prefix)?.max(1.0);
+        let t0 = Instant::now();
+        p.utility(prefix)?;
+        Ok((work, t0.elapsed().as_secs_f64()))
+    };
+    let k2 = prefix_for(full / 4.0)?;
+    let k1 = prefix_for(full / 64.0)?.min(k2.saturating_sub(1)).max(1);
+    let cost = ExactCost::through(timed(k1)?, timed(k2)?);
+    Ok(Some((cost.time(full), cost)))
 }
 
 /// Share of a walk's value that one reversal costs, for a person: a walk that paces back
@@ -382,11 +434,11 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     };
     let deferred: Option<Duration> = estimate.map(|(t, _)| t);
     stats.deferred = deferred.is_some();
-    // Seconds per multiply-add of an exact evaluation, when deferred: the final
-    // evaluation's time is scaled from it to the search's walk of the moment (one with
-    // fewer coincident samples costs more: mall robot 2,036 m, 1.35e10 for the best
+    // The cost model of an exact evaluation, when deferred: the final evaluation's time
+    // is computed from it for the search's walk of the moment (one with fewer coincident
+    // samples costs more: mall robot 2,036 m, 1.35e10 multiply-adds for the best
     // construction, 1.60e10 for the search's walk).
-    let rate = estimate.map(|(t, work)| t.as_secs_f64() / work);
+    let rate = estimate.map(|(_, cost)| cost);
     if deferred.is_some() {
         fixed.clear();
     }
@@ -446,7 +498,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     //    machine), or a bounded number of batches without a time limit.
     let reserve = |walk: &[usize]| -> Result<Duration> {
         Ok(match rate {
-            Some(r) => Duration::from_secs_f64(r * p.engine.utility_work(walk)? * DEFER_MARGIN),
+            Some(c) => c.time(p.engine.utility_work(walk)?).mul_f64(DEFER_MARGIN),
             None => t_exact.mul_f64(1.3),
         } + Duration::from_millis(50))
     };
@@ -1191,16 +1243,33 @@ mod tests {
         );
         let never = exact_time_estimate(&p, &walk, Duration::from_secs(60)).expect("estimate");
         assert!(never.is_none(), "{never:?}");
-        let (t, w) = exact_time_estimate(&p, &walk, Duration::from_millis(100))
+        let (t, cost) = exact_time_estimate(&p, &walk, Duration::from_millis(100))
             .expect("estimate")
             .expect("timed");
-        assert_eq!(w, work);
+        assert_eq!(cost.time(work), t);
         assert!(t > Duration::ZERO && t < Duration::from_secs(5), "{t:?}");
         // The work grows with the samples: a walk of half the budget is well under half.
         let half = grid_problem(150.0);
         let short = leg(&half, &whole_walk(&half), &[], None, &run);
         let w2 = p.engine.utility_work(&short).expect("work");
         assert!(w2 < 0.5 * work, "{w2:e} against {work:e}");
+    }
+
+    #[test]
+    fn the_cost_of_an_exact_evaluation_is_the_line_through_two_timings() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+        // 60 ms fixed and 5e-11 s a multiply-add (huge-3k's figures): found again, and a
+        // 4e9 evaluation costs 260 ms, not the 8 x 60 ms + ... of one prefix scaled.
+        let c = ExactCost::through((1e8, 0.065), (1e9, 0.11));
+        assert!(close(c.fixed, 0.06) && close(c.per_work, 5e-11), "{c:?}");
+        assert!(close(c.time(4e9).as_secs_f64(), 0.26));
+        // A first timing slowed (a negative fixed part, or a falling line): the larger
+        // one's rate alone, so a larger evaluation is not underestimated.
+        for small in [(1e8, 0.001), (1e8, 0.2)] {
+            let c = ExactCost::through(small, (1e9, 0.11));
+            assert_eq!(c.fixed, 0.0);
+            assert!(close(c.per_work, 1.1e-10), "{c:?}");
+        }
     }
 
     #[test]
