@@ -415,7 +415,11 @@ pub(in crate::plan) fn leg_marked(
             {
                 continue;
             }
-            let total = len + reach + ed.length + m.dist(y, spec.to);
+            // From the end's row (contiguous), not `y`'s column: on the first step of a
+            // randomised leg every unwalked edge gets here, and a column read is a cache
+            // miss each on a building of thousands of vertices. Shortest distances are
+            // symmetric (to rounding, far below BUDGET_EPS).
+            let total = len + reach + ed.length + m.dist(spec.to, y);
             if spec.any_fit && !fits(total) {
                 continue;
             }
@@ -445,7 +449,7 @@ pub(in crate::plan) fn leg_marked(
             break;
         };
         let ed = b.edges[e];
-        if !fits(len + reach + ed.length + m.dist(y, spec.to)) {
+        if !fits(len + reach + ed.length + m.dist(spec.to, y)) {
             break; // the baseline's rule: the nearest edge no longer fits
         }
         let from = walk.len();
