@@ -40,7 +40,7 @@ impl Solver for Coverage {
     }
 
     fn solve(&self, p: &Problem, run: &Run) -> Result<Outcome> {
-        let walk = build(p, 0.0, false, run);
+        let walk = systematic_walk(p, run);
         let utility = p.utility(&walk)?;
         p.offer(run, &walk, utility);
         run.report(
@@ -51,6 +51,12 @@ impl Solver for Coverage {
         );
         Ok(Outcome::new(walk, utility, Termination::Completed))
     }
+}
+
+/// The systematic walk of the baseline: nearest unwalked edge first, while the way back
+/// fits.
+pub(in crate::plan) fn systematic_walk(p: &Problem, run: &Run) -> Vec<usize> {
+    build(p, 0.0, false, run)
 }
 
 /// The spread construction with novelty radius `radius` metres (0: nearest edge first),

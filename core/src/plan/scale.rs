@@ -142,7 +142,7 @@ const CHEAP_WORK_PER_SECOND: f64 = 1e8;
 /// factor, the kernel rows) and a part per multiply-add of its factorisations
 /// ([`crate::utility::UtilityEngine::utility_work`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct ExactCost {
+pub(in crate::plan) struct ExactCost {
     fixed: f64,
     per_work: f64,
 }
@@ -189,7 +189,7 @@ impl ExactCost {
 /// past that step. One prefix of an eighth scaled by the ratio of the works (how this was
 /// estimated before) counted the fixed part eight times: huge-3k person 3,116 m, 702 ms
 /// estimated against 272 ms taken, which left its 2 s plan no search at all.
-fn exact_time_estimate(
+pub(in crate::plan) fn exact_time_estimate(
     p: &Problem,
     walk: &[usize],
     limit: Duration,

@@ -44,7 +44,8 @@ pub struct Args {
     /// Seed of every random choice.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Stop after this many seconds with the best walk so far (auto: 2 s by default).
+    /// Stop after this many seconds with the best walk so far (auto: 2 s by default; a
+    /// baseline returns the systematic walk it started from when that is worth more).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     #[command(flatten)]
