@@ -5,37 +5,26 @@
 //!
 //! `cargo run --release -p trailprint-core --example scale_probe -- FILE START END BUDGET
 //! robot|human LIMIT_S SEED [PLAN.json,PLAN.json...]`
-use std::path::Path;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use trailprint::gp::fit_kernel;
+use trailprint::Error;
 use trailprint::plan::scale::{Surrogate, plan_large};
 use trailprint::plan::{Control, Problem, Run};
-use trailprint::surveyor::Surveyor;
-use trailprint::{Building, Error};
+
+#[path = "common/cases.rs"]
+mod cases;
 
 fn main() -> trailprint::Result<()> {
-    let a: Vec<String> = std::env::args().collect();
-    if a.len() < 8 {
-        return Err(Error::InvalidRequest(
-            "usage: scale_probe FILE START END BUDGET robot|human LIMIT_S SEED [PLANS]".into(),
-        ));
-    }
+    let a = cases::args_or_usage(
+        8,
+        "scale_probe FILE START END BUDGET robot|human LIMIT_S SEED [PLANS]",
+    )?;
     let number = |i: usize| -> trailprint::Result<f64> {
         a[i].parse()
             .map_err(|_| Error::InvalidRequest(format!("argument {i}: not a number: {}", a[i])))
     };
-    let b = Arc::new(Building::load(Path::new(&a[1]))?);
-    let kernel = match b.kernel {
-        Some(k) => k,
-        None => fit_kernel(&b.pilot)?.kernel,
-    };
-    let model = if a[5] == "human" {
-        Surveyor::human()
-    } else {
-        Surveyor::robot()
-    };
+    let (b, kernel) = cases::load_with_kernel(&a[1])?;
+    let model = cases::model_named(&a[5]);
     let (start, end) = (b.require_vertex(&a[2])?, b.require_vertex(&a[3])?);
     let p = Problem::new(b.clone(), kernel, model, start, end, number(4)?)?;
     if let Some(files) = a.get(8) {

@@ -1,6 +1,10 @@
 //! The generated buildings the surrogate examples measure on (`surrogate_error`,
-//! `surrogate_near`): a two-floor campus of 290 vertices and a mall floor of 565.
+//! `surrogate_near`): a two-floor campus of 290 vertices and a mall floor of 565; and
+//! what the examples that take a building file share (`scale_probe`, `replan_compare`).
+//! Not every example uses every item.
+#![allow(dead_code)]
 
+use std::path::Path;
 use std::sync::Arc;
 
 use trailprint::building::Building;
@@ -17,6 +21,35 @@ pub fn model_from_args() -> (bool, Surveyor) {
         Surveyor::robot()
     };
     (human, model)
+}
+
+/// The command line, when it has at least `count` words (the program's name included),
+/// else an error that shows `usage`.
+pub fn args_or_usage(count: usize, usage: &str) -> trailprint::Result<Vec<String>> {
+    let a: Vec<String> = std::env::args().collect();
+    if a.len() < count {
+        return Err(trailprint::Error::InvalidRequest(format!("usage: {usage}")));
+    }
+    Ok(a)
+}
+
+/// A building file with its kernel: the file's own, else fitted on its pilot data.
+pub fn load_with_kernel(path: &str) -> trailprint::Result<(Arc<Building>, Kernel)> {
+    let b = Arc::new(Building::load(Path::new(path))?);
+    let kernel = match b.kernel {
+        Some(k) => k,
+        None => fit_kernel(&b.pilot)?.kernel,
+    };
+    Ok((b, kernel))
+}
+
+/// The surveyor an argument names: `human`, else the robot.
+pub fn model_named(name: &str) -> Surveyor {
+    if name == "human" {
+        Surveyor::human()
+    } else {
+        Surveyor::robot()
+    }
 }
 
 /// (name, floors, rooms per side, corridor length m, room depth m).

@@ -10,7 +10,8 @@
 //!   then applies it and acknowledges it ([`Ack`]): a rejected event writes nothing, and an
 //!   acknowledged one survives a kill.
 //! * Storage is behind the small [`SessionLog`] trait ([`MemoryLog`] in memory, the SQLite
-//!   store for the app); replanning is behind [`Replanner`] ([`GreedyReplanner`] built in).
+//!   store for the app); replanning is behind [`Replanner`] ([`default_replanner`]: the
+//!   built-in [`GreedyReplanner`] on small buildings, `auto` on large ones).
 //! * Threading: a `Session` is `Send` but used from one thread at a time; the bindings wrap
 //!   it in a mutex.
 //!
@@ -57,7 +58,7 @@ use serde::{Deserialize, Serialize};
 
 pub use log::{LogEntry, MemoryLog, PlanData, SessionLog, SessionRow};
 pub use posterior::IncrementalPosterior;
-pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner};
+pub use replan::{GreedyReplanner, PlannerReplanner, ReplanRequest, Replanner, default_replanner};
 pub use tracker::Tracker;
 pub use types::*;
 
@@ -223,7 +224,7 @@ impl Session {
         )?;
         Ok(Session {
             log,
-            replanner: Arc::new(GreedyReplanner),
+            replanner: replan::default_replanner(&building),
             id,
             building_id: plan.building_id,
             plan_id,

@@ -185,6 +185,50 @@ pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>>
     Ok(out)
 }
 
+/// Time limit of a replan by `auto` on a large building ([`default_replanner`]). A replan
+/// may plan twice (once more with a wider reserve for wrong turns), so a surveyor waits
+/// at most about twice this. Measured with `examples/replan_compare` (one core, from
+/// 20%, 50% and 80% of an auto plan): 1 s adds within 3% of what 2 s adds (campus robot
+/// 446 m: 117.25 / 72.39 / 24.31 nats against 116.19 / 72.12 / 24.34; mall person
+/// 509 m: 45.59 / 24.98 / 6.55 against 46.84 / 24.44 / 6.55).
+pub const LARGE_REPLAN_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Buildings with more vertices than this replan with `auto` by default
+/// ([`default_replanner`]). The session-greedy's evaluations factorise the posterior of
+/// every vertex for every path it tries, so its time grows with the cube of the vertex
+/// count: measured with `examples/replan_compare` from 20%, 50% and 80% of an auto plan
+/// (one core), 0.02 to 0.14 s on the generated 125-vertex office (person 201 m), 0.5 to
+/// 2.9 s on the 290-vertex campus (person 446 m) and 0.7 to 15.9 s on the 565-vertex mall
+/// (person 509 m; a simulated session there spent 30 to 44 s a replan). Below this
+/// count it is also the safer choice where wrong turns are very frequent: with a wrong
+/// turn at 30% of the vertices (`simulate --deviate 0.3 --seed 2`, office, 225 m) auto's
+/// walks, which reach into the rooms, meet more wrong turns per metre, the session's
+/// reserve for them grows, and 2 of 4 runs ended after 72 and 82 m (32 nats), where the
+/// greedy walks 206 m (55.31 nats); at 10% (seeds 1-3) the two are level there (auto
+/// 64.6 nats on average, greedy 63.4).
+pub const LARGE_REPLAN_VERTICES: usize = 200;
+
+/// The replanner a session starts with: [`GreedyReplanner`] on buildings of at most
+/// [`LARGE_REPLAN_VERTICES`] vertices, where it answers within a third of a second and
+/// the same state always gives the same walk; `auto` with [`LARGE_REPLAN_LIMIT`] on
+/// larger ones, where the greedy is slow and short-sighted. From 20%, 50% and 80% of an
+/// auto plan (`examples/replan_compare`, one core), what the new walk adds: mall person
+/// 509 m, greedy 35.48 / 17.40 / 5.59 nats in 15.9 / 6.7 / 0.7 s, auto 47.59 / 27.93 /
+/// 6.29 nats in 2 s each; campus robot 446 m, greedy 24.10 / 56.23 / 12.74 nats, auto
+/// 116.45 / 77.32 / 24.21. Whole simulated sessions on the campus, person, 446 m, a wrong
+/// turn at 10% of the vertices, seeds 1-3: auto collects 115.90 / 106.21 / 117.18 nats,
+/// greedy 99.72 / 90.50 / 100.83; at 30% (300 m, seeds 2-4) 82.38 / 81.18 / 70.56
+/// against 79.25 / 81.23 / 75.53.
+pub fn default_replanner(b: &Building) -> Arc<dyn Replanner> {
+    if b.len() > LARGE_REPLAN_VERTICES {
+        let mut auto = PlannerReplanner::new(crate::plan::Algorithm::Auto);
+        auto.time_limit = Some(LARGE_REPLAN_LIMIT);
+        Arc::new(auto)
+    } else {
+        Arc::new(GreedyReplanner)
+    }
+}
+
 /// Any planner of [`crate::plan`], conditioned on the collected samples through
 /// [`plan_with_prior`](crate::plan::plan_with_prior). Deterministic for a seed unless the
 /// algorithm stops on a time limit (`auto` does by default); a resumed session redoes an

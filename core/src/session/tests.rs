@@ -611,3 +611,66 @@ fn a_robot_that_follows_the_plan_gets_no_reserve_and_exactly_the_planned_utility
     assert!(!s.guidance().message.contains("reserve"));
     assert!(utility_gap(&sum) < 1e-12, "{sum:?}");
 }
+
+/// A session replans with `auto` on a building of more than
+/// [`replan::LARGE_REPLAN_VERTICES`] vertices (the session greedy takes seconds there and
+/// plans short-sighted walks) and with the session greedy on a small one; either way the
+/// new walk starts where the surveyor is and fits what is left.
+#[test]
+fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() {
+    use crate::plan::{Algorithm, PlanOrigin};
+    use crate::synth::{SynthParams, generate};
+
+    let (log, mut small) = setup(40.0, Surveyor::human());
+    let r = small.replan().expect("replan");
+    let origin = log.load_plan(r.plan_id).expect("plan").record.algorithm;
+    assert_eq!(origin, PlanOrigin::SessionGreedy);
+
+    let params = SynthParams {
+        name: "campus".into(),
+        floors: 2,
+        rooms_per_side: 6,
+        corridor_length_m: 48.0,
+        room_depth_m: 8.0,
+        ..SynthParams::default()
+    };
+    let b = Arc::new(
+        Building::from_file(generate(&params).expect("generate").file, "campus").expect("valid"),
+    );
+    assert!(
+        b.len() > replan::LARGE_REPLAN_VERTICES,
+        "{} vertices",
+        b.len()
+    );
+    let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
+    let log = Arc::new(MemoryLog::new());
+    let bid = log.add_building(b.clone());
+    let start = b.vertices[0].id.clone();
+    let mut req = crate::plan::PlanRequest::new(&start, &start, 200.0, k);
+    req.settings.algorithm = Algorithm::Coverage;
+    req.settings.model = Surveyor::human();
+    let planned = crate::plan::plan(b.clone(), &req, &crate::plan::Control::new()).expect("plan");
+    let ids: Vec<&str> = planned.walk.iter().map(String::as_str).collect();
+    let plan = log
+        .save_plan(&PlanData::for_walk(bid, &ids, 200.0, k, planned.length_m))
+        .expect("save");
+    let mut large = Session::start(
+        log.clone(),
+        plan,
+        Surveyor::human(),
+        SessionOptions::default(),
+    )
+    .expect("start");
+    let r = large.replan().expect("replan");
+    let record = log.load_plan(r.plan_id).expect("plan").record;
+    assert_eq!(record.algorithm, PlanOrigin::Planner(Algorithm::Auto));
+    assert_eq!(r.from_vertex, start);
+    assert!(r.length_m <= r.budget_left_m - r.reserve_m + 1e-9, "{r:?}");
+    // What auto plans from the start with the whole budget is worth more than the
+    // systematic walk it replaced.
+    assert!(
+        r.utility_nats > planned.utility_nats,
+        "{r:?} against {}",
+        planned.utility_nats
+    );
+}

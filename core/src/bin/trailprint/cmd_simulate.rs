@@ -52,8 +52,10 @@ pub struct Args {
     /// Time limit of the initial plan, seconds (auto: 2 s by default).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
-    /// Planner of replans: `session-greedy` (fast, deterministic) or a planner name.
-    #[arg(long, default_value = "session-greedy")]
+    /// Planner of replans: `default` (`session-greedy` on buildings of up to 200
+    /// vertices, `auto` with a 1 s limit on larger ones), `session-greedy` (deterministic)
+    /// or a planner name.
+    #[arg(long, default_value = "default")]
     replan_algorithm: String,
     /// Never replan automatically when off-route (the surveyor walks back instead).
     #[arg(long)]
@@ -257,9 +259,10 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         ..SimOptions::default()
     };
     sim.validate()?;
-    let replanner: Arc<dyn Replanner> = match a.replan_algorithm.as_str() {
-        "session-greedy" => Arc::new(GreedyReplanner),
-        name => Arc::new(PlannerReplanner::new(Algorithm::from_name(name)?)),
+    let replanner: Option<Arc<dyn Replanner>> = match a.replan_algorithm.as_str() {
+        "default" => None,
+        "session-greedy" => Some(Arc::new(GreedyReplanner)),
+        name => Some(Arc::new(PlannerReplanner::new(Algorithm::from_name(name)?))),
     };
     let time_limit = crate::opts::time_limit(a.time_limit)?;
     let req = PlanRequest {
@@ -289,7 +292,9 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     };
     let log: Arc<dyn SessionLog> = store.clone();
     let mut session = Session::start(log, plan_id, surveyor, options)?;
-    session.set_replanner(replanner);
+    if let Some(r) = replanner {
+        session.set_replanner(r);
+    }
     let world = World::for_building(&b, &kernel, a.seed)?;
     if a.print_acks {
         println!("session {} plan {plan_id}", session.id());
