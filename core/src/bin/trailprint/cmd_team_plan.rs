@@ -24,8 +24,9 @@ pub struct Args {
     /// Refinement rounds (each surveyor replanned given all the others).
     #[arg(long, default_value_t = 1)]
     rounds: usize,
-    /// Planner for each surveyor.
-    #[arg(long, default_value = "genetic", value_parser = crate::opts::parse_algorithm)]
+    /// Planner for each surveyor (auto, as for `plan`: on the generated 565-vertex mall,
+    /// two robots of 250 m, 189.79 team nats in 12 s where genetic took 89 s for 142.84).
+    #[arg(long, default_value = "auto", value_parser = crate::opts::parse_algorithm)]
     algorithm: Algorithm,
     /// Time limit of each planner run, seconds.
     #[arg(long)]
