@@ -115,3 +115,62 @@ fn bad_options_fail_with_a_message() {
     let out = simulate(None, &["--deviate", "0.1"]);
     assert_eq!(out.status.code(), Some(2), "--surveyor is required");
 }
+
+/// A building whose dense survey is too large for the simulated world (a GP on 6,000
+/// points would take 550 MiB) is refused with the count and the size, before a plan is
+/// made: the database gets no plan and no session.
+#[test]
+fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
+    let dir = tempfile::tempdir().expect("dir");
+    let db = dir.path().join("s.db");
+    let file = dir.path().join("dense.json");
+    let dense: Vec<String> = (0..6000)
+        .map(|i| format!(r#"{{"x":{},"y":0,"rss":{{"ap":-60}}}}"#, i as f64 * 0.005))
+        .collect();
+    let text = format!(
+        r#"{{"format":"survey-building/1","name":"dense line",
+        "vertices":[{{"id":"a","x":0,"y":0}},{{"id":"b","x":15,"y":0}},{{"id":"c","x":30,"y":0}}],
+        "edges":[{{"a":"a","b":"b"}},{{"a":"b","b":"c"}}],
+        "kernel":{{"sf2":40,"ell":6,"sn2":2}},
+        "dense_survey":[{}]}}"#,
+        dense.join(",")
+    );
+    std::fs::write(&file, text).expect("write");
+    let out = Command::new(BIN)
+        .arg("--db")
+        .arg(&db)
+        .arg("simulate")
+        .arg("--building")
+        .arg(&file)
+        .args([
+            "--start",
+            "a",
+            "--end",
+            "a",
+            "--budget",
+            "20",
+            "--surveyor",
+            "robot",
+        ])
+        .output()
+        .expect("run trailprint simulate");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("\"dense line\"")
+            && err.contains("6000 dense_survey points")
+            && err.contains("need about 550 MiB"),
+        "{err}"
+    );
+    let plans = Command::new(BIN)
+        .arg("--db")
+        .arg(&db)
+        .arg("plans")
+        .output()
+        .expect("run trailprint plans");
+    assert!(
+        String::from_utf8_lossy(&plans.stdout).contains("no plans"),
+        "{}",
+        String::from_utf8_lossy(&plans.stdout)
+    );
+}

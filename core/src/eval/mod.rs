@@ -208,7 +208,14 @@ impl WorldModel {
         }
         let aps = heard_aps(&building.dense_survey);
         let (points, values) = fingerprint_matrix(&building.dense_survey, &aps);
-        let gp = GpModel::fit(kernel, &points, &values)?;
+        let gp = GpModel::fit(kernel, &points, &values).map_err(|e| {
+            Error::InvalidRequest(format!(
+                "building {:?}: the world model is a GP on its {} dense_survey points: {e} \
+                 (`trailprint generate --dense-spacing` sets how dense a generated survey is)",
+                building.name,
+                points.len()
+            ))
+        })?;
         Ok(WorldModel::Survey { aps, gp })
     }
 

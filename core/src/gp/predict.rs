@@ -38,6 +38,14 @@ use crate::{Error, Result};
 /// Query points handled per parallel task in [`GpModel::predict`].
 const CHUNK: usize = 256;
 
+/// Most memory a fitted model may take, bytes: a fit holds two `n x n` matrices (the
+/// Cholesky factor and its lower triangle, [`GpModel::l`]), 16 `n^2` bytes, so at most
+/// 5,792 training points. Beyond that a fit is refused before it allocates: the
+/// generated 3,161-vertex floor's dense survey (23,121 points) took 4.3 GB and did not
+/// finish its factorisation in 15 minutes as the world model of `simulate`. The same
+/// default as a plan's memory budget ([`crate::plan::DEFAULT_MEMORY_BUDGET`]).
+pub const FIT_MEMORY_BUDGET: u64 = crate::plan::DEFAULT_MEMORY_BUDGET;
+
 /// A fitted posterior: one Cholesky factor for all outputs.
 #[derive(Debug, Clone)]
 pub struct GpModel {
@@ -95,6 +103,16 @@ impl GpModel {
         if let Some(v) = values.iter().find(|v| !v.is_finite()) {
             return Err(Error::Numerical(format!(
                 "GP fit: training value {v} is not finite"
+            )));
+        }
+        let need = 16.0 * (n as f64).powi(2);
+        if need > FIT_MEMORY_BUDGET as f64 {
+            return Err(Error::InvalidRequest(format!(
+                "GP fit: {n} training points need about {} MiB (two {n} x {n} matrices), more \
+                 than the {} MiB a fit may take; use at most 5,792 points (a part of the \
+                 building, or fewer samples)",
+                (need / (1u64 << 20) as f64).ceil(),
+                FIT_MEMORY_BUDGET >> 20
             )));
         }
         let m = values.ncols();
@@ -270,6 +288,23 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    /// A fit too large for [`FIT_MEMORY_BUDGET`] is refused with the count and the size,
+    /// before its matrices are allocated (5,793 points would take 512 MiB and more).
+    #[test]
+    fn a_fit_beyond_the_memory_budget_is_refused_with_its_size() {
+        let k = Kernel::new(20.0, 4.0, 2.0);
+        let n = 5_793;
+        let train: Vec<Point> = (0..n).map(|i| Point::new(i as f64, 0.0, 0)).collect();
+        let e = GpModel::fit(&k, &train, &DMatrix::zeros(n, 1)).expect_err("too large");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("5793 training points need about 513 MiB"),
+            "{msg}"
+        );
+        // One point fewer fits the budget (checked on the estimate, not by fitting).
+        assert!(16.0 * (5_792f64).powi(2) <= FIT_MEMORY_BUDGET as f64);
     }
 
     #[test]

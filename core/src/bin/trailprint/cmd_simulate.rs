@@ -278,6 +278,9 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             ..PlanSettings::default()
         },
     };
+    // The simulated world first: a building too large for it is refused before a plan is
+    // made and saved.
+    let world = World::for_building(&b, &kernel, a.seed)?;
     let planned = plan(b.clone(), &req, &Control::new())?;
     let plan_id = store.save_plan(
         BuildingRef::Id(bid),
@@ -295,7 +298,6 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     if let Some(r) = replanner {
         session.set_replanner(r);
     }
-    let world = World::for_building(&b, &kernel, a.seed)?;
     if a.print_acks {
         println!("session {} plan {plan_id}", session.id());
     }
