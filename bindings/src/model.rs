@@ -131,7 +131,9 @@ pub fn fit_building_kernel(building_json: String, origin: String) -> Result<FitS
 }
 
 /// The mutual information `f_D(P)` (nats) of a walk given by vertex ids, with the given
-/// kernel, or the building's own kernel when `kernel` is null.
+/// kernel, or the building's own kernel when `kernel` is null. A walk whose evaluation
+/// would need more than 512 MiB (a building of thousands of vertices) is refused with
+/// the size, before anything is allocated.
 #[uniffi::export]
 pub fn walk_utility(
     building_json: String,
@@ -148,6 +150,14 @@ pub fn walk_utility(
         ))
     })?;
     let indices = b.resolve_walk(&walk)?;
-    let engine = trailprint::utility::UtilityEngine::new(Arc::new(b), kernel, surveyor.into())?;
+    let model = surveyor.into();
+    let samples = trailprint::samples::sample_walk(&b, &indices, &model, &kernel)?.len();
+    trailprint::utility::check_evaluation_memory(
+        &b,
+        samples,
+        1,
+        trailprint::plan::DEFAULT_MEMORY_BUDGET,
+    )?;
+    let engine = trailprint::utility::UtilityEngine::new(Arc::new(b), kernel, model)?;
     Ok(engine.utility(&indices)?)
 }

@@ -27,6 +27,10 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
+    /// Most memory the evaluation may use, MiB; a larger one is refused with the size it
+    /// needs.
+    #[arg(long, value_name = "MIB", default_value_t = 512)]
+    memory_budget: u64,
     /// One JSON object per walk.
     #[arg(long)]
     json: bool,
@@ -56,12 +60,23 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             .map_err(|e| Error::InvalidRequest(format!("{origin}: {e}")))?;
         resolved.push(w);
     }
+    let samples: Vec<usize> = resolved
+        .iter()
+        .map(|w| Ok(trailprint::samples::sample_walk(&b, w, &model, &kernel)?.len()))
+        .collect::<Result<_>>()?;
+    trailprint::utility::check_evaluation_memory(
+        &b,
+        samples.iter().copied().max().unwrap_or(0),
+        rayon::current_num_threads().min(resolved.len()),
+        a.memory_budget.saturating_mul(1 << 20),
+    )?;
     let engine = UtilityEngine::new(b.clone(), kernel, model)?;
     let utilities = engine.utilities(&resolved);
-    for ((walk, u), (origin, _)) in resolved.iter().zip(utilities).zip(&walks) {
+    for (((walk, u), (origin, _)), &samples) in
+        resolved.iter().zip(utilities).zip(&walks).zip(&samples)
+    {
         let u = u?;
         let length = b.walk_length(walk);
-        let samples = trailprint::samples::sample_walk(&b, walk, &model, &kernel)?.len();
         if a.json {
             let out = serde_json::json!({
                 "walk": b.walk_ids(walk),
