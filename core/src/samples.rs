@@ -270,6 +270,10 @@ impl WalkSampler {
 }
 
 /// All samples of a walk, in order (SPEC section 4).
+///
+/// # Errors
+/// An empty walk, a step without an edge, or a surveyor model that fails
+/// [`Surveyor::validate`] (checked first: a spacing that is not positive has no end).
 pub fn sample_walk(
     building: &Building,
     walk: &[usize],
@@ -282,6 +286,9 @@ pub fn sample_walk(
             message: "the walk is empty".into(),
         });
     };
+    // A spacing that is not positive would place samples without end (a walking speed of
+    // -1 m/s filled 24 GB before this check).
+    model.validate()?;
     let mut sampler = WalkSampler::new(building, start, *model, *kernel);
     let mut out = Vec::new();
     for &v in &walk[1..] {
@@ -301,6 +308,33 @@ mod tests {
           "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":2,"y":0},{"id":"c","x":2,"y":1.5},{"id":"d","x":4,"y":0}],
           "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"},{"a":"b","b":"d"}]}"#;
         Building::from_json(text, "line").expect("valid")
+    }
+
+    /// A walking speed of -1 m/s (the bindings pass a profile as given) was sampled
+    /// without end: 24 GB before the out-of-memory killer. It is refused, naming it.
+    #[test]
+    fn a_model_with_a_spacing_that_is_not_positive_is_refused_before_sampling() {
+        let b = line();
+        let walk = b.resolve_walk(&["a", "b", "d"]).expect("walk");
+        let Surveyor::Human {
+            step_length_m,
+            scan_interval_s,
+            step_error,
+            turn_threshold_deg,
+            ..
+        } = Surveyor::human()
+        else {
+            unreachable!("human() is a human")
+        };
+        let model = Surveyor::Human {
+            step_length_m,
+            speed_mps: -1.0,
+            scan_interval_s,
+            step_error,
+            turn_threshold_deg,
+        };
+        let e = sample_walk(&b, &walk, &model, &Kernel::new(20.0, 5.0, 2.0)).expect_err("refused");
+        assert!(e.to_string().contains("speed"), "{e}");
     }
 
     #[test]
