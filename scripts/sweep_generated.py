@@ -5,7 +5,11 @@ rooms 6-14 m deep, grids of 1.5-3 m), a random start and end on each, both surve
 models, budgets of 25%, 50% and 100% of the building's total edge length; `auto` with its
 default 2 s limit, one core a plan (two plans at a time, pinned to cores 0 and 1).
 
-    python3 scripts/sweep_generated.py [SEED] [BUILDINGS]     (defaults 7 and 8)
+    python3 scripts/sweep_generated.py [SEED] [BUILDINGS] [--vary-radio]     (defaults 7 and 8)
+
+With `--vary-radio` each building also draws its number of access points (2-40) and pilot
+points (8-60) instead of the generator's defaults (a separate random stream, so the
+buildings, starts and ends of a seed are the same with and without it).
 
 Prints one line per row and flags a row where auto is below 1.05x coverage, uses less than
 95% of the budget, or takes longer than 2.35 s (wall, process start-up included); a
@@ -19,9 +23,12 @@ BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release"
 
 
 def main():
-    seed = int(sys.argv[1]) if len(sys.argv) > 1 else 7
-    count = int(sys.argv[2]) if len(sys.argv) > 2 else 8
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    vary_radio = "--vary-radio" in sys.argv[1:]
+    seed = int(args[0]) if len(args) > 0 else 7
+    count = int(args[1]) if len(args) > 1 else 8
     rng = random.Random(seed)
+    radio_rng = random.Random(seed * 1_000_003 + 17)
     tmp = tempfile.mkdtemp()
     jobs = []
     for k in range(count):
@@ -32,7 +39,10 @@ def main():
         subprocess.run([BIN, "generate", "--out", path, "--name", f"b{k}", "--floors", str(o["floors"]),
                         "--rooms", str(o["rooms"]), "--corridor-length", str(o["corridor"]),
                         "--room-depth", str(o["depth"]), "--grid-spacing", str(o["grid"]),
-                        "--seed", str(o["seed"])], check=True, capture_output=True)
+                        "--seed", str(o["seed"])]
+                       + (["--aps", str(radio_rng.choice([2, 3, 5, 8, 12, 20, 40])),
+                           "--pilot", str(radio_rng.choice([8, 12, 20, 35, 60]))] if vary_radio else []),
+                       check=True, capture_output=True)
         b = json.load(open(path))
         pos = {v["id"]: (v["x"], v["y"]) for v in b["vertices"]}
         total = sum(e.get("length", math.hypot(pos[e["a"]][0] - pos[e["b"]][0], pos[e["a"]][1] - pos[e["b"]][1]))
@@ -94,6 +104,17 @@ def main():
         flagged += bool(flags)
         print(head, f"auto {a['u']:.2f} coverage {c['u']:.2f} ratio {ratio:.3f} "
               f"length/budget {a['length'] / budget:.3f} wall {a['wall']:.2f} s", "; ".join(flags))
+    # Utility never decreases when only the budget grows (same building, ends and model).
+    by_case = {}
+    for j, a, _ in results:
+        if "u" in a:
+            by_case.setdefault((j[0], j[5]), []).append((j[6], a["u"]))
+    for (name, model), rows in sorted(by_case.items()):
+        rows.sort()
+        for (b0, u0), (b1, u1) in zip(rows, rows[1:]):
+            if u1 < u0:
+                flagged += 1
+                print(f"{name} {model}: utility falls from {u0:.2f} at {b0:.0f} m to {u1:.2f} at {b1:.0f} m")
     print(f"{len(results)} rows, {flagged} flagged, {refused} refused")
 
 

@@ -54,7 +54,9 @@ impl From<trailprint::Error> for TrailprintError {
         match e {
             E::Io { .. } => TrailprintError::Io(msg),
             E::Parse { .. } | E::InvalidBuilding { .. } => TrailprintError::InvalidBuilding(msg),
-            E::InvalidWalk { .. } | E::InvalidRequest(_) => TrailprintError::InvalidRequest(msg),
+            E::InvalidWalk { .. } | E::InvalidRequest(_) | E::TimeLimitTooShort { .. } => {
+                TrailprintError::InvalidRequest(msg)
+            }
             E::Unreachable { .. } => TrailprintError::Unreachable(msg),
             E::Fit(_) => TrailprintError::Fit(msg),
             E::Cancelled => TrailprintError::Cancelled(msg),

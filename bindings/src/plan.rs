@@ -160,7 +160,11 @@ impl PlanJob {
             }
             *ran = true;
         }
-        let mut control = Control::new().with_cancel_token(self.cancel.clone());
+        // The time limit counts from here: the store's kernel fit and loading the
+        // building are part of what the app waits for.
+        let mut control = Control::new()
+            .with_cancel_token(self.cancel.clone())
+            .with_clock_from(std::time::Instant::now());
         if let Some(l) = listener {
             control = control.with_observer(Arc::new(ListenerObserver(l)));
         }

@@ -65,6 +65,16 @@ pub enum Error {
     #[error("numerical failure: {0}")]
     Numerical(String),
 
+    /// A time limit too short for the answer: on a large building one exact evaluation
+    /// of a walk that uses the budget (SPEC 3, the only utility a plan reports) takes
+    /// longer than the limit leaves. `needed` is about what the plan would take; a caller
+    /// that prefers a late answer to none (a survey session's replan) may retry with it.
+    #[error("{message}")]
+    TimeLimitTooShort {
+        needed: std::time::Duration,
+        message: String,
+    },
+
     /// A long computation was cancelled by its caller.
     #[error("cancelled")]
     Cancelled,

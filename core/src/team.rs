@@ -156,6 +156,12 @@ pub fn plan_team(
             req.surveyors[i].start
         )),
     };
+    // Every run gets the whole time limit of the shared settings: the clock starts
+    // at each run, not at a start the caller may have set for one plan.
+    let control = &Control {
+        started: None,
+        ..control.clone()
+    };
     let k = req.surveyors.len();
     let engine =
         UtilityEngine::with_prior(building.clone(), req.kernel, req.settings.model, prior)?;

@@ -231,6 +231,29 @@ fn a_limit_used_up_by_set_up_still_gives_a_walk_of_the_whole_budget() {
     }
 }
 
+/// The time limit counts from the caller's clock where it gives one: the command line
+/// and the app start it before loading the building and fitting the kernel, which are
+/// set-up too (a fit on 60 pilot locations took 0.2 s of a 2 s limit before the plan's
+/// own clock started). A clock already past the limit gives the walk of the
+/// constructions at once, not another full limit.
+#[test]
+fn the_limit_counts_from_the_callers_clock() {
+    let _serial = crate::serial();
+    let (office, k) = office();
+    let mut req = round_trip(&office, 200.0, k);
+    req.settings.time_limit = Some(Duration::from_secs(2));
+    let began = Instant::now() - Duration::from_secs(3);
+    let t0 = Instant::now();
+    let r = plan(office.clone(), &req, &Control::new().with_clock_from(began)).expect("plan");
+    let took = t0.elapsed();
+    assert!(
+        took < Duration::from_millis(1500),
+        "{took:?} after a clock 3 s past its 2 s limit"
+    );
+    assert_eq!(r.termination, Termination::TimeLimit);
+    assert!(r.length_m >= 0.9 * 200.0, "{} m", r.length_m);
+}
+
 /// Records the best walk's length and utility of every progress report that carries them.
 #[derive(Default)]
 struct Bests {

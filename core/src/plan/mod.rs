@@ -42,7 +42,6 @@ pub mod steiner;
 pub mod surrogate;
 
 use std::sync::Arc;
-use std::time::Instant;
 
 use crate::building::Building;
 use crate::samples::sample_walk;
@@ -198,8 +197,9 @@ pub fn plan_with_prior(
     prior: &[crate::utility::Observation],
     control: &Control,
 ) -> Result<PlanResult> {
-    // The clock starts now: set-up (shortest paths, the engine) counts against the limit.
-    let started = Instant::now();
+    // The clock starts now, or earlier where the caller says so (loading the building,
+    // fitting the kernel): set-up (shortest paths, the engine) counts against the limit.
+    let started = control.clock_start();
     let (start, end) = validate(&building, req)?;
     check_memory(&building, req, prior.len())?;
     let run = Run::starting_at(control.clone(), req.effective_time_limit(), started)

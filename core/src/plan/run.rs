@@ -39,12 +39,13 @@ impl Observer for NoObserver {
     fn progress(&self, _: &Progress) {}
 }
 
-/// How the caller steers a running plan: a cancel token another thread may set, and an
-/// optional progress observer.
+/// How the caller steers a running plan: a cancel token another thread may set, an
+/// optional progress observer, and optionally when the caller's clock started.
 #[derive(Clone, Default)]
 pub struct Control {
     pub(crate) cancel: Arc<AtomicBool>,
     pub(crate) observer: Option<Arc<dyn Observer>>,
+    pub(crate) started: Option<Instant>,
 }
 
 impl std::fmt::Debug for Control {
@@ -52,6 +53,7 @@ impl std::fmt::Debug for Control {
         f.debug_struct("Control")
             .field("cancelled", &self.is_cancelled())
             .field("observer", &self.observer.is_some())
+            .field("started", &self.started)
             .finish()
     }
 }
@@ -72,6 +74,20 @@ impl Control {
     pub fn with_observer(mut self, observer: Arc<dyn Observer>) -> Self {
         self.observer = Some(observer);
         self
+    }
+
+    /// Counts the time limit from `started` instead of from the call to the planner: a
+    /// caller that loads the building or fits the kernel first (the command line, the
+    /// store) passes when it began, so that its set-up counts against the limit too
+    /// (issue 13: "honoured ... set-up included").
+    pub fn with_clock_from(mut self, started: Instant) -> Self {
+        self.started = Some(started);
+        self
+    }
+
+    /// When the plan's clock starts: [`Control::with_clock_from`]'s instant, else now.
+    pub fn clock_start(&self) -> Instant {
+        self.started.unwrap_or_else(Instant::now)
     }
 
     /// The cancel token, to hand to another thread.

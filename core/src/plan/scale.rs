@@ -70,8 +70,8 @@ use rayon::prelude::*;
 use super::coverage::{Leg, Marks, leg, leg_marked, reversals, unpace};
 pub use super::surrogate::{Frame, Surrogate};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
-use crate::Result;
 use crate::samples::Surveyor;
+use crate::{Error, Result};
 
 /// Candidates per batch of the large-neighbourhood search (evaluated in parallel).
 const BATCH: usize = 8;
@@ -222,6 +222,69 @@ pub(in crate::plan) fn exact_time_estimate(
     let k1 = prefix_for(full / 64.0)?.min(k2.saturating_sub(1)).max(1);
     let cost = ExactCost::through(timed(k1)?, timed(k2)?);
     Ok(Some((cost.time(full), cost)))
+}
+
+/// How far past its time limit a plan may return (issue 13: "within max(10%, 0.2 s)").
+pub(in crate::plan) fn limit_allowance(limit: Duration) -> Duration {
+    (limit / 10).max(Duration::from_millis(200))
+}
+
+/// Refuses a plan whose final exact evaluation cannot end within the time limit and its
+/// [`limit_allowance`]: `t` is that evaluation's estimated time for `walk` (a walk that
+/// uses the budget), `cost` the model it came from. The utility a plan reports is SPEC
+/// 3's exact one, and on a large floor with a robot's sample every 0.5 m one evaluation
+/// of a long walk takes seconds (1,070 vertices, robot 2,768 m: 5,532 samples, about
+/// 2 s on one core here), so no walk that uses the budget can be returned in time:
+/// rather than overrun the limit by that much, the plan stops here, at once, with what
+/// it needs and what to change. The budget named is the one whose walk's evaluation
+/// takes at most a quarter of the limit (the rest for set-up and search).
+fn refuse_if_too_slow(
+    p: &Problem,
+    run: &Run,
+    walk: &[usize],
+    t: Duration,
+    cost: ExactCost,
+) -> Result<()> {
+    let (Some(deadline), Some(limit)) = (run.deadline(), run.time_limit()) else {
+        return Ok(());
+    };
+    let now = Instant::now();
+    let finish = now + t.mul_f64(DEFER_MARGIN);
+    if finish <= deadline + limit_allowance(limit) {
+        return Ok(());
+    }
+    let needed = finish.saturating_duration_since(deadline - limit);
+    // The longest prefix of the walk whose evaluation the limit affords.
+    let (mut lo, mut hi) = (1usize, walk.len());
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if cost.time(p.engine.utility_work(&walk[..mid])?) <= limit / 4 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let fits = p.length(&walk[..lo]);
+    let samples = (p.length(walk) / p.engine.model().spacing()).floor() as u64 + 1;
+    Err(Error::TimeLimitTooShort {
+        needed,
+        message: format!(
+            "planning on {:?} ({} vertices, budget {:.1} m) needs about {:.1} s on this \
+             device, more than the time limit of {:.1} s: the utility of a walk that uses \
+             the budget ({samples} samples) is one dense factorisation, about {:.1} s here, \
+             which grows with the cube of the samples; raise the time limit (--time-limit, \
+             PlanRequest.time_limit) to {:.0} s or more, or plan a budget of about {:.0} m \
+             (or one floor or part of the building)",
+            p.building.name,
+            p.building.len(),
+            p.budget,
+            needed.as_secs_f64(),
+            limit.as_secs_f64(),
+            t.as_secs_f64(),
+            (needed + limit).as_secs_f64().ceil(),
+            fits.floor()
+        ),
+    })
 }
 
 /// Share of a walk's value that one reversal costs, for a person: a walk that paces back
@@ -439,6 +502,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // samples costs more: mall robot 2,036 m, 1.35e10 multiply-adds for the best
     // construction, 1.60e10 for the search's walk).
     let rate = estimate.map(|(_, cost)| cost);
+    if let Some((t, cost)) = estimate {
+        refuse_if_too_slow(p, run, &cur, t, cost)?;
+    }
     if deferred.is_some() {
         fixed.clear();
     }
@@ -1253,6 +1319,70 @@ mod tests {
         let short = leg(&half, &whole_walk(&half), &[], None, &run);
         let w2 = p.engine.utility_work(&short).expect("work");
         assert!(w2 < 0.5 * work, "{w2:e} against {work:e}");
+    }
+
+    /// A plan whose final exact evaluation cannot end within the limit and its allowance
+    /// is refused, naming the time it needs, a limit that would do and a budget whose
+    /// walk the limit affords; one that can is not. The cost models are given (a device
+    /// 1,000 times slower than any, and a free one), so the verdict does not depend on
+    /// this machine.
+    #[test]
+    fn a_limit_that_cannot_hold_the_final_evaluation_is_refused_with_what_would_do() {
+        let p = grid_problem(300.0);
+        let run = Run::new(Control::new(), Some(Duration::from_secs(1)));
+        let walk = leg(&p, &whole_walk(&p), &[], None, &run);
+        let work = p.engine.utility_work(&walk).expect("work");
+        let slow = ExactCost {
+            fixed: 0.0,
+            per_work: 5.0 / work,
+        };
+        let e = refuse_if_too_slow(&p, &run, &walk, slow.time(work), slow)
+            .expect_err("5 s of evaluation under a 1 s limit");
+        let Error::TimeLimitTooShort { needed, message } = e else {
+            panic!("not a time refusal: {e}");
+        };
+        assert!(needed >= Duration::from_secs(5), "{needed:?}");
+        for part in [
+            "\"grid\"",
+            "budget 300.0 m",
+            "time limit of 1.0 s",
+            "raise the time limit",
+        ] {
+            assert!(message.contains(part), "{part:?} not in {message}");
+        }
+        // The budget named is a prefix of the walk whose evaluation takes a quarter of
+        // the limit: here (work grows with the cube of the samples) well under 300 m.
+        let named: f64 = message
+            .rsplit("plan a budget of about ")
+            .next()
+            .and_then(|t| t.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .expect("a budget in the message");
+        assert!(named > 10.0 && named < 200.0, "{named} m: {message}");
+        let k = (1..walk.len())
+            .take_while(|&k| p.length(&walk[..k]) <= named + 1e-9)
+            .last()
+            .expect("a prefix");
+        let w = p.engine.utility_work(&walk[..k]).expect("work");
+        assert!(
+            slow.time(w) <= Duration::from_millis(250),
+            "{:?}",
+            slow.time(w)
+        );
+        // Within the allowance (max(10%, 0.2 s)), or free: no refusal.
+        let tight = ExactCost {
+            fixed: 0.0,
+            per_work: 0.9 / work,
+        };
+        assert!(refuse_if_too_slow(&p, &run, &walk, tight.time(work), tight).is_ok());
+        let free = ExactCost {
+            fixed: 0.0,
+            per_work: 0.0,
+        };
+        assert!(refuse_if_too_slow(&p, &run, &walk, Duration::ZERO, free).is_ok());
+        // Without a time limit there is nothing to refuse.
+        let unlimited = Run::new(Control::new(), None);
+        assert!(refuse_if_too_slow(&p, &unlimited, &walk, slow.time(work), slow).is_ok());
     }
 
     #[test]

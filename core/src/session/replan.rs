@@ -269,8 +269,19 @@ impl Replanner for PlannerReplanner {
             r.kernel,
             &settings,
         );
-        let res =
-            crate::plan::plan_with_prior(b.clone(), &req, r.prior, &crate::plan::Control::new())?;
+        let control = crate::plan::Control::new();
+        let res = match crate::plan::plan_with_prior(b.clone(), &req, r.prior, &control) {
+            // A surveyor waiting mid-survey needs a walk: where the limit cannot hold one
+            // exact evaluation (a robot's long walk on a large floor), a late answer beats
+            // none, so plan again with the time it said it needs and the limit on top.
+            Err(crate::Error::TimeLimitTooShort { needed, .. }) => {
+                let mut req = req;
+                req.settings.time_limit =
+                    Some(needed.mul_f64(1.5) + self.time_limit.unwrap_or_default());
+                crate::plan::plan_with_prior(b.clone(), &req, r.prior, &control)?
+            }
+            other => other?,
+        };
         Ok(res.walk_indices)
     }
 
