@@ -700,9 +700,22 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
             frame = Some(sur.frame(&walk)?);
             stats.surrogate_evals += 1;
         }
-        // The walk's marks for each radius a move of this batch takes.
+        // The walk's marks for each radius a move of this batch takes: those of the
+        // walk before, moved by the steps that changed (a stretch or two), unless that
+        // is most of the walk.
+        if let Some(old) = marks_of.as_deref()
+            && old != walk.as_slice()
+        {
+            let (o, n) = super::coverage::changed_spans(old, &walk);
+            if o.len() + n.len() > walk.len() {
+                marks.iter_mut().for_each(|m| *m = None);
+            } else {
+                for m in marks.iter_mut().flatten() {
+                    m.rewalk(old, &walk);
+                }
+            }
+        }
         if marks_of.as_deref() != Some(walk.as_slice()) {
-            marks.iter_mut().for_each(|m| *m = None);
             marks_of = Some(walk.clone());
         }
         for m in &moves {
