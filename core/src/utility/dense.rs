@@ -128,7 +128,9 @@ fn factor_checked(isa: Isa, a: &mut [f64], layout: Layout, job: Job) -> Option<f
         super::simd::IsaKind::Avx2Fma => unsafe { factor_avx2(a, layout, job) },
         // SAFETY: bounds checked above; the portable build fuses multiply-adds where the
         // base instruction set has them (aarch64).
-        _ => unsafe { factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, job) },
+        _ => unsafe {
+            factor_with::<Plain<{ super::simd::GENERIC_FMA }>>(a, layout, job, Some(strip_generic))
+        },
     }
 }
 
@@ -136,14 +138,14 @@ fn factor_checked(isa: Isa, a: &mut [f64], layout: Layout, job: Job) -> Option<f
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
 unsafe fn factor_avx512(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
     // SAFETY: forwarded from `factor_after`.
-    unsafe { factor_with::<std::arch::x86_64::__m512d>(a, layout, job) }
+    unsafe { factor_with::<std::arch::x86_64::__m512d>(a, layout, job, Some(strip_avx512)) }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn factor_avx2(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
     // SAFETY: forwarded from `factor_after`.
-    unsafe { factor_with::<Plain<true>>(a, layout, job) }
+    unsafe { factor_with::<Plain<true>>(a, layout, job, Some(strip_avx2)) }
 }
 
 /// What one factorisation is asked: the leading block already factored (`known` rows),
@@ -164,7 +166,12 @@ struct Job {
 /// available.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // `r` indexes the matrix too, through `at`
-unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, job: Job) -> Option<f64> {
+unsafe fn factor_with<L: Lanes>(
+    a: &mut [f64],
+    layout: Layout,
+    job: Job,
+    strip: Option<StripFn>,
+) -> Option<f64> {
     let Layout { n, ld } = layout;
     let Job {
         known,
@@ -210,6 +217,7 @@ unsafe fn factor_with<L: Lanes>(a: &mut [f64], layout: Layout, job: Job) -> Opti
                     panel0,
                     known,
                     pack.get_or_insert_with(Pack::new),
+                    strip,
                 )
             };
         }
@@ -355,12 +363,11 @@ unsafe fn update_panel<L: Lanes>(
     panel0: usize,
     known: usize,
     pack: &mut Pack,
+    strip: Option<StripFn>,
 ) {
     let end = (panel0 + PANEL).min(n);
     let pu = pack.u.as_mut_ptr();
     let pb = pack.b.as_mut_ptr();
-    // Tile width at column `j0` of a strip ending at `s1`: 16 where a pair fits.
-    let width = |j0: usize, s1: usize| if L::PAIRS && j0 + 8 < s1 { 16 } else { 8 };
     let mut p0 = 0;
     while p0 < panel0 {
         let p1 = (p0 + KC).min(panel0);
@@ -379,53 +386,153 @@ unsafe fn update_panel<L: Lanes>(
                 };
             }
         }
-        let mut s0 = if panel0 < known { known } else { panel0 };
-        while s0 < n {
-            let s1 = (s0 + STRIP).min(n);
-            let mut j0 = s0;
-            while j0 < s1 {
-                let w = width(j0, s1);
-                for p in 0..depth {
-                    unsafe {
-                        std::ptr::copy_nonoverlapping(
-                            ptr.add((p0 + p) * ld + j0),
-                            pb.add((j0 - s0) * KC + p * w),
-                            w,
-                        )
-                    };
-                }
-                j0 += w;
+        let first = if panel0 < known { known } else { panel0 };
+        let base = SharedStrip(Strip {
+            a: ptr,
+            ld,
+            n,
+            panel0,
+            end,
+            p0,
+            depth,
+            pu,
+            pb,
+            s0: first,
+        });
+        match strip {
+            // Enough strips for several threads: each strip writes only its own columns
+            // of the panel's rows and reads the packed multipliers and the rows above the
+            // panel, which nothing writes meanwhile; each task packs into its own buffer.
+            Some(f) if rayon::current_num_threads() > 1 && n - first > 2 * STRIP => {
+                use rayon::prelude::*;
+                let base = &base;
+                (first..n)
+                    .step_by(STRIP)
+                    .collect::<Vec<_>>()
+                    .into_par_iter()
+                    .for_each_init(
+                        || vec![0.0; (STRIP + 8) * KC],
+                        |buf, s0| {
+                            let st = Strip {
+                                pb: buf.as_mut_ptr(),
+                                s0,
+                                ..base.0
+                            };
+                            // SAFETY: as for the sequential strips below; the strips'
+                            // writes are disjoint.
+                            unsafe { f(&st) }
+                        },
+                    );
             }
-            for (blk, k) in (panel0..end).step_by(MR).enumerate() {
-                let mr = MR.min(n - k);
-                // Tiles of this strip at or right of the block's diagonal.
-                let mut j0 = s0;
-                while j0 < s1 {
-                    let w = width(j0, s1);
-                    if j0 + w > k {
-                        let src = Depth {
-                            // SAFETY: inside the packs, as filled above.
-                            u: unsafe { pu.add(blk * KC * MR) },
-                            u_stride: MR,
-                            b: unsafe { pb.add((j0 - s0) * KC) },
-                            b_stride: w,
-                            len: depth,
-                        };
-                        // SAFETY: j0 + 16 <= n + 16 <= ld; rows k..k + 8 <= n + 8.
-                        unsafe {
-                            if w == 16 {
-                                tile::<L, 2>(ptr, ld, k, j0, mr, None, src);
-                            } else {
-                                tile::<L, 1>(ptr, ld, k, j0, mr, None, src);
-                            }
-                        }
-                    }
-                    j0 += w;
+            _ => {
+                for s0 in (first..n).step_by(STRIP) {
+                    // SAFETY: forwarded from this function's contract.
+                    unsafe { update_strip::<L>(&Strip { s0, ..base.0 }) };
                 }
             }
-            s0 = s1;
         }
         p0 = p1;
+    }
+}
+
+/// A strip's pointers shared by the tasks of a parallel panel update.
+struct SharedStrip(Strip);
+// SAFETY: the tasks write disjoint columns of the matrix, read what no task writes (see
+// `update_panel`) and pack into buffers of their own.
+unsafe impl Sync for SharedStrip {}
+
+/// One column strip of a panel update, from column `s0` to `s0 + STRIP` (or `n`): the
+/// panel's rows `panel0..end` updated by the depth chunk `p0..p0 + depth`, whose
+/// multipliers are packed at `pu`; the strip's block is packed into `pb`.
+#[derive(Clone, Copy)]
+struct Strip {
+    a: *mut f64,
+    ld: usize,
+    n: usize,
+    panel0: usize,
+    end: usize,
+    p0: usize,
+    depth: usize,
+    pu: *mut f64,
+    pb: *mut f64,
+    s0: usize,
+}
+
+/// A strip update compiled for one instruction set: what a task of a parallel panel
+/// update runs (a rayon task does not inherit the driver's target features, so it calls
+/// one of these rather than the generic code).
+type StripFn = unsafe fn(&Strip);
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,fma")]
+unsafe fn strip_avx512(s: &Strip) {
+    // SAFETY: forwarded from `update_panel`.
+    unsafe { update_strip::<std::arch::x86_64::__m512d>(s) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn strip_avx2(s: &Strip) {
+    // SAFETY: forwarded from `update_panel`.
+    unsafe { update_strip::<Plain<true>>(s) }
+}
+
+unsafe fn strip_generic(s: &Strip) {
+    // SAFETY: forwarded from `update_panel`.
+    unsafe { update_strip::<Plain<{ super::simd::GENERIC_FMA }>>(s) }
+}
+
+/// Updates one column strip ([`Strip`]): packs its chunk-strip block, then updates the
+/// tiles of every block row of the panel at or right of the block's diagonal.
+///
+/// # Safety
+/// As for [`update_panel`], whose strip this is; `pb` holds `(STRIP + 8) * KC` doubles.
+#[inline(always)]
+unsafe fn update_strip<L: Lanes>(st: &Strip) {
+    let (ptr, ld, n, s0) = (st.a, st.ld, st.n, st.s0);
+    let (panel0, end, p0, depth, pu, pb) = (st.panel0, st.end, st.p0, st.depth, st.pu, st.pb);
+    let width = |j0: usize, s1: usize| if L::PAIRS && j0 + 8 < s1 { 16 } else { 8 };
+    let s1 = (s0 + STRIP).min(n);
+    let mut j0 = s0;
+    while j0 < s1 {
+        let w = width(j0, s1);
+        for p in 0..depth {
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    ptr.add((p0 + p) * ld + j0),
+                    pb.add((j0 - s0) * KC + p * w),
+                    w,
+                )
+            };
+        }
+        j0 += w;
+    }
+    for (blk, k) in (panel0..end).step_by(MR).enumerate() {
+        let mr = MR.min(n - k);
+        // Tiles of this strip at or right of the block's diagonal.
+        let mut j0 = s0;
+        while j0 < s1 {
+            let w = width(j0, s1);
+            if j0 + w > k {
+                let src = Depth {
+                    // SAFETY: inside the packs, as filled above.
+                    u: unsafe { pu.add(blk * KC * MR) },
+                    u_stride: MR,
+                    b: unsafe { pb.add((j0 - s0) * KC) },
+                    b_stride: w,
+                    len: depth,
+                };
+                // SAFETY: j0 + 16 <= n + 16 <= ld; rows k..k + 8 <= n + 8.
+                unsafe {
+                    if w == 16 {
+                        tile::<L, 2>(ptr, ld, k, j0, mr, None, src);
+                    } else {
+                        tile::<L, 1>(ptr, ld, k, j0, mr, None, src);
+                    }
+                }
+            }
+            j0 += w;
+        }
     }
 }
 
@@ -766,6 +873,60 @@ pub(crate) mod tests {
         }
     }
 
+    /// The large-matrix path's column strips run on several threads where there are
+    /// (`update_panel`), and every entry sees the same multiply-adds in the same order:
+    /// one thread and three give the same factor and log-determinant bit for bit, with
+    /// and without a known block, and the factor is right.
+    pub(crate) fn check_threads(isa: Isa) {
+        let n = 1300;
+        let run = |threads: usize, known: usize| {
+            let (mut a, m, layout) = spd(n);
+            if known > 0 {
+                // Factor the leading block first, as the engine's S side does.
+                let lead = Layout::new(known);
+                let mut b = vec![0.0; lead.len()];
+                for i in 0..known {
+                    b[i * lead.ld..i * lead.ld + known]
+                        .copy_from_slice(&a[i * layout.ld..i * layout.ld + known]);
+                }
+                factor(isa, &mut b, lead, 0).expect("pd");
+                for i in 0..known {
+                    a[i * layout.ld..i * layout.ld + known]
+                        .copy_from_slice(&b[i * lead.ld..i * lead.ld + known]);
+                }
+            }
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            let d = pool
+                .install(|| factor_after(isa, &mut a, layout, known, n / 3))
+                .expect("pd");
+            (a, d, m, layout)
+        };
+        for known in [0, 640] {
+            let (one, d1, m, layout) = run(1, known);
+            let (three, d3, _, _) = run(3, known);
+            assert_eq!(d1.to_bits(), d3.to_bits(), "{isa:?} known {known}");
+            for i in 0..n {
+                let row = i * layout.ld;
+                for j in i..n {
+                    assert_eq!(
+                        one[row + j].to_bits(),
+                        three[row + j].to_bits(),
+                        "{isa:?} known {known}: entry ({i}, {j})"
+                    );
+                }
+            }
+            assert_logdet(
+                d3,
+                schur_logdet(&m, n / 3),
+                &format!("{isa:?} known {known}"),
+            );
+            assert_factor(&three, layout, &m, &format!("{isa:?} three threads"));
+        }
+    }
+
     /// A log-determinant within `1e-10` relative of the reference.
     fn assert_logdet(got: f64, want: f64, what: &str) {
         assert!(
@@ -904,7 +1065,8 @@ pub(crate) mod tests {
                     logdet_from: from,
                     blocked_from: CHUNK_FROM,
                 };
-                let got = unsafe { factor_with::<Plain<OTHER>>(&mut a, layout, job) }.expect("pd");
+                let got =
+                    unsafe { factor_with::<Plain<OTHER>>(&mut a, layout, job, None) }.expect("pd");
                 let want = schur_logdet(&m, from);
                 assert!(
                     (got - want).abs() <= 1e-10 * want.abs().max(1.0),

@@ -28,6 +28,7 @@ fn check_isa(kind: IsaKind) {
     dense::tests::check_indefinite(isa);
     dense::tests::check_known(isa);
     dense::tests::check_blocked_path(isa);
+    dense::tests::check_threads(isa);
     engine::tests::check(isa);
 }
 
