@@ -330,6 +330,42 @@ fn a_request_beyond_the_memory_budget_is_refused_before_allocating() {
     plan(small, &req, &Control::new()).expect("fits");
 }
 
+/// Each planning thread may hold a walk's matrix, so the estimate grows with the threads;
+/// a device with many cores plans with as many as the memory budget affords instead of
+/// refusing what one core could plan (the 565-vertex mall, robot 2,036 m: refused at
+/// 1,359 MiB on eight threads, 190 MiB on one). Only a request that one thread cannot
+/// plan is refused, naming what one thread needs.
+#[test]
+fn many_threads_plan_with_fewer_where_the_memory_budget_needs_it() {
+    let _serial = crate::serial();
+    let (office, k) = office();
+    let pool = |n: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("pool")
+    };
+    let mut req = round_trip(&office, 400.0, k);
+    req.settings.algorithm = trailprint::plan::Algorithm::Coverage;
+    let one = pool(1).install(|| trailprint::plan::estimate_memory(&office, &req, 0));
+    let four = pool(4).install(|| trailprint::plan::estimate_memory(&office, &req, 0));
+    assert!(four > one, "{four} against {one}");
+    req.settings.memory_budget = (one + four) / 2;
+    let r = pool(4)
+        .install(|| plan(office.clone(), &req, &Control::new()))
+        .expect("planned with fewer threads");
+    assert!(r.length_m > 0.9 * 400.0, "{}", r.length_m);
+    req.settings.memory_budget = one - 1;
+    let e = pool(4)
+        .install(|| plan(office.clone(), &req, &Control::new()))
+        .expect_err("one thread does not fit");
+    let mib = one.div_ceil(1 << 20);
+    assert!(
+        e.to_string().contains(&format!("needs about {mib} MiB")),
+        "{e}"
+    );
+}
+
 /// `trailprint utility` (and the bindings' `walk_utility`) evaluated any walk on any
 /// building: on a line of 20,000 vertices a 2 m walk took 6.4 GB and 79 s, and aborted
 /// under a 2 GB limit. Now a building whose vertex covariance alone exceeds the memory

@@ -201,7 +201,29 @@ pub fn plan_with_prior(
     // fitting the kernel): set-up (shortest paths, the engine) counts against the limit.
     let started = control.clock_start();
     let (start, end) = validate(&building, req)?;
-    check_memory(&building, req, prior.len())?;
+    let threads = check_memory(&building, req, prior.len())?;
+    if threads < rayon::current_num_threads() {
+        // Fewer threads evaluate fewer walks at once: a device with many cores plans
+        // what one core could within the memory budget, rather than refusing it.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| Error::InvalidRequest(format!("{threads} planning threads: {e}")))?;
+        return pool
+            .install(|| plan_validated(building, req, prior, control, started, (start, end)));
+    }
+    plan_validated(building, req, prior, control, started, (start, end))
+}
+
+/// [`plan_with_prior`] once the request is valid and its memory affordable.
+fn plan_validated(
+    building: Arc<Building>,
+    req: &PlanRequest,
+    prior: &[crate::utility::Observation],
+    control: &Control,
+    started: std::time::Instant,
+    (start, end): (usize, usize),
+) -> Result<PlanResult> {
     let run = Run::starting_at(control.clone(), req.effective_time_limit(), started)
         .for_algorithm(req.settings.algorithm);
     let metric = Arc::new(Metric::new(&building));
@@ -310,6 +332,16 @@ fn best_so_far(problem: &Problem, run: &Run, termination: Termination) -> Result
 /// vertices]` plus the incremental rows of such a walk (and, for recursive greedy, the
 /// posterior covariances of the partial walks it holds).
 pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> u64 {
+    estimate_memory_with(building, req, prior, rayon::current_num_threads())
+}
+
+/// [`estimate_memory`] with `threads` planning threads.
+fn estimate_memory_with(
+    building: &Building,
+    req: &PlanRequest,
+    prior: usize,
+    threads: usize,
+) -> u64 {
     let nv = building.len() as f64;
     let nd = (building.pilot.len() + prior) as f64;
     let budget = if req.budget.is_finite() {
@@ -320,7 +352,7 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     let ns = budget / req.settings.model.spacing().max(1e-3) + 2.0;
     let metric = 12.0 * nv * nv;
     let n = nd + ns + nv + 16.0;
-    let threads = rayon::current_num_threads().max(1) as f64;
+    let threads = threads.max(1) as f64;
     // The large-building search (auto and coverage beyond `auto::LARGE_VERTICES`) only
     // evaluates whole walks; the other planners also grow walks incrementally (rows of
     // `L` and `W` per sample, from the engine's posterior of the pilot data).
@@ -369,12 +401,20 @@ pub fn estimate_memory(building: &Building, req: &PlanRequest, prior: usize) -> 
     (metric + engine + root_state + threads * per_thread + fixed).min(u64::MAX as f64) as u64
 }
 
-/// Refuses a request whose estimated working set exceeds its memory budget.
-fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<()> {
-    let need = estimate_memory(building, req, prior);
-    if need <= req.settings.memory_budget {
-        return Ok(());
+/// The number of planning threads whose estimated working set fits the request's memory
+/// budget (each thread may hold a walk's matrix, so the estimate grows with them): all of
+/// the current pool's where they fit, else fewer. Refuses the request when even one
+/// thread does not fit. (On eight threads the 565-vertex mall, robot 2,036 m, was
+/// refused at 1,359 MiB; one thread plans it in 190 MiB.)
+fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<usize> {
+    let threads = rayon::current_num_threads().max(1);
+    if let Some(k) = (1..=threads)
+        .rev()
+        .find(|&k| estimate_memory_with(building, req, prior, k) <= req.settings.memory_budget)
+    {
+        return Ok(k);
     }
+    let need = estimate_memory_with(building, req, prior, 1);
     let mib = |b: u64| b.div_ceil(1 << 20);
     Err(Error::InvalidRequest(format!(
         "planning on {:?} ({} vertices, budget {} m) needs about {} MiB, more than the memory \
