@@ -21,6 +21,12 @@ pub enum TrailprintError {
     /// message gives the shortest length).
     #[error("{0}")]
     Unreachable(String),
+    /// The time limit cannot hold one exact evaluation of a walk that uses the budget (a
+    /// robot's long walk on a large floor): nothing was planned. The message names the
+    /// time needed and ends "raise the time limit (...) to N s or more, or plan a budget
+    /// of about M m"; offer to plan again with N seconds, or with the smaller budget.
+    #[error("{0}")]
+    TimeLimitTooShort(String),
     /// The kernel cannot be fitted on the building's pilot data (give a kernel or more
     /// pilot data).
     #[error("{0}")]
@@ -54,9 +60,8 @@ impl From<trailprint::Error> for TrailprintError {
         match e {
             E::Io { .. } => TrailprintError::Io(msg),
             E::Parse { .. } | E::InvalidBuilding { .. } => TrailprintError::InvalidBuilding(msg),
-            E::InvalidWalk { .. } | E::InvalidRequest(_) | E::TimeLimitTooShort { .. } => {
-                TrailprintError::InvalidRequest(msg)
-            }
+            E::InvalidWalk { .. } | E::InvalidRequest(_) => TrailprintError::InvalidRequest(msg),
+            E::TimeLimitTooShort { .. } => TrailprintError::TimeLimitTooShort(msg),
             E::Unreachable { .. } => TrailprintError::Unreachable(msg),
             E::Fit(_) => TrailprintError::Fit(msg),
             E::Cancelled => TrailprintError::Cancelled(msg),
@@ -113,6 +118,13 @@ mod tests {
                     shortest: 2.0,
                 },
                 |t| matches!(t, T::Unreachable(_)),
+            ),
+            (
+                E::TimeLimitTooShort {
+                    needed: std::time::Duration::from_secs(4),
+                    message: "raise the time limit (--time-limit) to 6 s or more".into(),
+                },
+                |t| matches!(t, T::TimeLimitTooShort(_)),
             ),
             (E::Fit("few".into()), |t| matches!(t, T::Fit(_))),
             (E::Cancelled, |t| matches!(t, T::Cancelled(_))),

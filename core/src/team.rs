@@ -150,6 +150,11 @@ pub fn plan_team(
     let request_for = |i: usize| requests[i].clone();
     let name_err = |i: usize, e: Error| match e {
         Error::Cancelled => Error::Cancelled,
+        // Kept as what it is, so that the app can offer the time it names.
+        Error::TimeLimitTooShort { needed, message } => Error::TimeLimitTooShort {
+            needed,
+            message: format!("surveyor {} ({}): {message}", i + 1, req.surveyors[i].start),
+        },
         other => Error::InvalidRequest(format!(
             "surveyor {} ({}): {other}",
             i + 1,

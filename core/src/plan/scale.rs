@@ -237,7 +237,9 @@ pub(in crate::plan) fn limit_allowance(limit: Duration) -> Duration {
 /// 2 s on one core here), so no walk that uses the budget can be returned in time:
 /// rather than overrun the limit by that much, the plan stops here, at once, with what
 /// it needs and what to change. The budget named is the one whose walk's evaluation
-/// takes at most a quarter of the limit (the rest for set-up and search).
+/// takes at most a quarter of the limit (the rest for set-up and search), where that is
+/// a tenth of the budget or more; the limit named is 1.5 times the time needed plus the
+/// limit asked for.
 fn refuse_if_too_slow(
     p: &Problem,
     run: &Run,
@@ -265,6 +267,12 @@ fn refuse_if_too_slow(
         }
     }
     let fits = p.length(&walk[..lo]);
+    // A budget is worth naming only where the limit affords a useful part of this one.
+    let smaller = if fits >= 0.1 * p.budget {
+        format!(", or plan a budget of about {:.0} m", fits.floor())
+    } else {
+        String::new()
+    };
     let samples = (p.length(walk) / p.engine.model().spacing()).floor() as u64 + 1;
     Err(Error::TimeLimitTooShort {
         needed,
@@ -273,16 +281,17 @@ fn refuse_if_too_slow(
              device, more than the time limit of {:.1} s: the utility of a walk that uses \
              the budget ({samples} samples) is one dense factorisation, about {:.1} s here, \
              which grows with the cube of the samples; raise the time limit (--time-limit, \
-             PlanRequest.time_limit) to {:.0} s or more, or plan a budget of about {:.0} m \
-             (or one floor or part of the building)",
+             PlanRequest.time_limit) to {:.0} s or more{smaller} (or plan one floor or part \
+             of the building)",
             p.building.name,
             p.building.len(),
             p.budget,
             needed.as_secs_f64(),
             limit.as_secs_f64(),
             t.as_secs_f64(),
-            (needed + limit).as_secs_f64().ceil(),
-            fits.floor()
+            // Half as much again as the estimate, so that a busier moment does not refuse
+            // the retry, and the limit itself for the search.
+            (needed.mul_f64(1.5) + limit).as_secs_f64().ceil(),
         ),
     })
 }

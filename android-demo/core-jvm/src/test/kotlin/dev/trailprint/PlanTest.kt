@@ -12,6 +12,7 @@ import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
 import dev.trailprint.ui.BudgetUnit
 import dev.trailprint.ui.PlanModel
+import dev.trailprint.ui.PlanState
 import dev.trailprint.ui.Profile
 import java.io.File
 import java.util.concurrent.CopyOnWriteArrayList
@@ -184,6 +185,59 @@ class PlanTest : ScratchDir("trailprint-plan-test") {
             model.plan()
             val failed = withTimeout(60_000) { model.state.first { !it.planning && it.error != null } }
             assertTrue("fits the budget" in failed.error!!, failed.error)
+        }
+    }
+
+    /** A 36 x 36 grid of 2 m corridors (1,296 vertices) with its kernel, as building JSON. */
+    private fun bigGridJson(): String {
+        val n = 36
+        val vertices = (0 until n * n).joinToString(",") { i -> """{"id":"g${i % n}_${i / n}","x":${2 * (i % n)},"y":${2 * (i / n)}}""" }
+        val edges = buildList {
+            for (y in 0 until n) for (x in 0 until n) {
+                if (x + 1 < n) add("""{"a":"g${x}_$y","b":"g${x + 1}_$y"}""")
+                if (y + 1 < n) add("""{"a":"g${x}_$y","b":"g${x}_${y + 1}"}""")
+            }
+        }.joinToString(",")
+        return """{"format":"survey-building/1","name":"big grid","vertices":[$vertices],"edges":[$edges],""" +
+            """"pilot":[{"x":0,"y":0,"rss":{"a":-50}}],"kernel":{"sf2":60,"ell":10,"sn2":4}}"""
+    }
+
+    @Test
+    fun theTimeLimitRefusalsLimitIsReadFromItsMessage() {
+        val msg = "planning on \"b8\" ... needs about 4.1 s on this device, more than the time limit of 2.0 s: ... " +
+            "raise the time limit (--time-limit, PlanRequest.time_limit) to 9 s or more, or plan a budget of about 1320 m"
+        assertEquals(9.0, PlanState.suggestedTimeLimit(msg))
+        assertNull(PlanState.suggestedTimeLimit("no walk from c00 to c20 fits the budget of 5 m"))
+        assertNull(PlanState.suggestedTimeLimit(null))
+    }
+
+    /**
+     * A robot's 2,200 m on a 1,296-vertex floor is 4,401 samples: one exact evaluation takes
+     * seconds, so a 0.1 s limit is refused at once (nothing saved), with the limit that would
+     * do; the screen's "plan with this much time" then plans and saves the walk.
+     */
+    @Test
+    fun aLimitTooShortForTheAnswerOffersTheTimeItNeeds() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            val bid = api.importBuilding(bigGridJson(), "big grid").id
+            val model = PlanModel(api, this, bid)
+            model.load().join()
+            model.tapVertex("g0_0")
+            model.tapVertex("g0_0")
+            model.setProfile(Profile.ROBOT)
+            model.setBudget(2200.0)
+            model.setAlgorithm(PlanAlgorithm.AUTO)
+            model.plan(0.1)
+            val refused = withTimeout(60_000) { model.state.first { !it.planning && it.error != null } }
+            assertTrue("more than the time limit of 0.1 s" in refused.error!!, refused.error)
+            val limit = assertNotNull(refused.suggestedTimeLimitS, refused.error)
+            assertTrue(limit > 0.1, "$limit")
+            assertEquals(0, api.plans(bid).size)
+            model.planWithSuggestedTime()
+            val done = withTimeout(120_000) { model.state.first { !it.planning && (it.result != null || it.error != null) } }
+            assertNull(done.error)
+            assertTrue(done.result!!.lengthM > 0.9 * 2200.0, "${done.result!!.lengthM}")
+            assertEquals(1, api.plans(bid).size)
         }
     }
 

@@ -40,6 +40,12 @@ data class PlanState(
     val progress: PlanProgress? = null,
     val result: PlanSummary? = null,
     val error: String? = null,
+    /**
+     * After a plan the time limit could not hold (a robot's long walk on a large floor, on
+     * a slow phone): the limit, seconds, the planner says would do. The screen offers
+     * "plan with this much time" ([PlanModel.planWithSuggestedTime]).
+     */
+    val suggestedTimeLimitS: Double? = null,
 ) {
     val surveyor: SurveyorProfile get() = if (profile == Profile.HUMAN) human else robot
 
@@ -53,6 +59,12 @@ data class PlanState(
 
     companion object {
         const val ROBOT_SPEED_MPS = 0.5
+
+        private val SUGGESTED_LIMIT = Regex("""raise the time limit \([^)]*\) to ([0-9]+(?:\.[0-9]+)?) s or more""")
+
+        /** The time limit, seconds, that a time-limit refusal's [message] names, if any. */
+        fun suggestedTimeLimit(message: String?): Double? =
+            message?.let { SUGGESTED_LIMIT.find(it)?.groupValues?.get(1)?.toDoubleOrNull() }
     }
 }
 
@@ -107,11 +119,17 @@ class PlanModel(
 
     fun setAlgorithm(algorithm: PlanAlgorithm) = _state.update { it.copy(algorithm = algorithm) }
 
+    /** Plans again with the time limit the last refusal named (nothing when there is none). */
+    fun planWithSuggestedTime() {
+        val limit = _state.value.suggestedTimeLimitS ?: return
+        plan(limit)
+    }
+
     fun plan(timeLimitS: Double? = null) {
         val s = _state.value
         if (!s.canPlan) return
         val request = PlanRequest(buildingId, s.start!!, s.end!!, s.budgetMetres, s.surveyor, s.algorithm, seed, timeLimitS)
-        _state.update { it.copy(planning = true, progress = null, result = null, error = null) }
+        _state.update { it.copy(planning = true, progress = null, result = null, error = null, suggestedTimeLimitS = null) }
         val running = api.startPlan(request)
         runningPlan = running
         planJob = scope.launch {
@@ -124,6 +142,8 @@ class PlanModel(
                 }
             } catch (e: TrailprintException.Cancelled) {
                 // The user cancelled: nothing to show.
+            } catch (e: TrailprintException.TimeLimitTooShort) {
+                _state.update { it.copy(error = e.message, suggestedTimeLimitS = PlanState.suggestedTimeLimit(e.message)) }
             } catch (e: TrailprintException) {
                 _state.update { it.copy(error = e.message) }
             } catch (e: CancellationException) {
@@ -143,5 +163,5 @@ class PlanModel(
         runningPlan?.stop()
     }
 
-    fun dismissError() = _state.update { it.copy(error = null) }
+    fun dismissError() = _state.update { it.copy(error = null, suggestedTimeLimitS = null) }
 }

@@ -122,7 +122,17 @@ fun PlanScreen(
     s.error?.let { msg ->
         AlertDialog(
             onDismissRequest = m::dismissError,
-            confirmButton = { TextButton(onClick = m::dismissError) { Text("OK") } },
+            confirmButton = {
+                val more = s.suggestedTimeLimitS
+                if (more != null) {
+                    TextButton(onClick = m::planWithSuggestedTime) { Text("Plan with %.0f s".format(more)) }
+                } else {
+                    TextButton(onClick = m::dismissError) { Text("OK") }
+                }
+            },
+            dismissButton = if (s.suggestedTimeLimitS != null) {
+                { TextButton(onClick = m::dismissError) { Text("Cancel") } }
+            } else null,
             title = { Text("Cannot plan") },
             text = { Text(msg) },
         )
