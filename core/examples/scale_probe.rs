@@ -5,6 +5,7 @@
 //!
 //! `cargo run --release -p trailprint-core --example scale_probe -- FILE START END BUDGET
 //! robot|human LIMIT_S SEED [PLAN.json,PLAN.json...]`
+//! (`LIMIT_S` 0: no time limit)
 use std::time::{Duration, Instant};
 
 use trailprint::Error;
@@ -50,7 +51,12 @@ fn main() -> trailprint::Result<()> {
         }
         return Ok(());
     }
-    let run = Run::new(Control::new(), Some(Duration::from_secs_f64(number(6)?)));
+    // A limit of 0: no time limit (the search's deterministic batch count).
+    let limit = number(6)?;
+    let run = Run::new(
+        Control::new(),
+        (limit > 0.0).then(|| Duration::from_secs_f64(limit)),
+    );
     let t0 = Instant::now();
     let (out, stats) = plan_large(&p, &run, number(7)? as u64)?;
     println!(

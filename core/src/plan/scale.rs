@@ -103,7 +103,7 @@ const SEARCH_KEEP: f64 = 0.5;
 /// (about 1.6e10 a second on one core here, for both): about 0.8 µs per vertex and
 /// 0.2 µs per sample (`examples/surrogate_error.rs`, one core: campus, 290 vertices,
 /// human 223 m 0.22 ms; mall, 565 vertices, human 509 m 0.50 ms, robot 509 m 0.67 ms).
-fn surrogate_units(p: &Problem) -> f64 {
+pub(super) fn surrogate_units(p: &Problem) -> f64 {
     let n = p.building.pilot.len() as f64 + p.budget / p.engine.model().spacing() + 1.0;
     13_000.0 * p.building.len() as f64 + 3_000.0 * n
 }
@@ -403,14 +403,44 @@ pub struct Stats {
     pub deferred: bool,
 }
 
+/// How the search of [`plan_large_with`] divides its work.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Schedule {
+    /// By the run's time limit: phases at shares of the window, the search until the time
+    /// left is what the final exact evaluation needs (`auto` on a large building).
+    Clock,
+    /// By a bounded number of batches, as without a time limit, so that the same seed
+    /// gives the same walk on any machine; the run's deadline and cancel still stop it
+    /// (a stage of `auto`'s small-building portfolio).
+    Batches,
+}
+
 /// `auto` on a large building (see the module doc). `seed` drives every random choice.
 pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)> {
+    plan_large_with(p, run, seed, Schedule::Clock)
+}
+
+/// [`plan_large`] with its work divided by `schedule`.
+pub fn plan_large_with(
+    p: &Problem,
+    run: &Run,
+    seed: u64,
+    schedule: Schedule,
+) -> Result<(Outcome, Stats)> {
     let mut stats = Stats::default();
+    // The limit and deadline the search plans its phases by (none for `Batches`, whose
+    // work does not depend on a clock); `run` still stops it at its deadline.
+    let (time_limit, deadline) = match schedule {
+        Schedule::Clock => (run.time_limit(), run.deadline()),
+        Schedule::Batches => (None, None),
+    };
     let human = matches!(p.engine.model(), Surveyor::Human { .. });
     // Progress shows the exact utility of the best walk offered so far (none before the
-    // first exact evaluation).
+    // first exact evaluation). As a stage of a portfolio (`Batches`) the search reports
+    // no fraction of its own: the portfolio's stages do.
     let report = |f: f64, m: String| {
         let best = run.incumbent().map(|(_, u)| u);
+        let f = if schedule == Schedule::Clock { f } else { 0.0 };
         run.report(Algorithm::Auto, f, best, m)
     };
     let sur = Surrogate::new(p)?;
@@ -499,7 +529,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // When one exact evaluation is dear beside the time limit (more than DEFER_SHARE of
     // it), the finalists are not evaluated before the search: the search gets that time,
     // and its walk is the one finalist evaluated, at the end (see DEFER_SHARE).
-    let estimate = match run.time_limit() {
+    let estimate = match time_limit {
         Some(limit) => exact_time_estimate(p, &cur, limit)?
             .filter(|(t, _)| t.as_secs_f64() > DEFER_SHARE * limit.as_secs_f64()),
         None => None,
@@ -529,11 +559,9 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
         // search no time. A finalist left out is not offered (its surrogate rank stands).
         let mut out = vec![timed_utility(&fixed[0])];
         let t1 = out[0].1;
-        let keep = run.time_limit().unwrap_or_default().mul_f64(SEARCH_KEEP);
+        let keep = time_limit.unwrap_or_default().mul_f64(SEARCH_KEEP);
         for w in &fixed[1..] {
-            let affordable = run
-                .deadline()
-                .is_none_or(|d| Instant::now() + t1.mul_f64(2.2) + keep <= d);
+            let affordable = deadline.is_none_or(|d| Instant::now() + t1.mul_f64(2.2) + keep <= d);
             if !affordable || run.should_stop() {
                 break;
             }
@@ -559,7 +587,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     // Exact evaluations during the search when they are cheap beside the limit (at most a
     // tenth of it each): the current walk whenever its surrogate value has grown by 1%,
     // so that progress and a cancel show exact figures.
-    let limit = run.time_limit().unwrap_or(Duration::from_secs(3600));
+    let limit = time_limit.unwrap_or(Duration::from_secs(3600));
     let exact_offers = t_exact < limit / 10 && deferred.is_none();
     let mut offered_s = cur_s;
     // The best walk of the search evaluated exactly so far (an offered walk): the
@@ -579,7 +607,7 @@ pub fn plan_large(p: &Problem, run: &Run, seed: u64) -> Result<(Outcome, Stats)>
     };
     let stop_for = |walk: &[usize]| -> Result<Option<Instant>> {
         let r = reserve(walk)?;
-        Ok(run.deadline().map(|d| d.checked_sub(r).unwrap_or(d)))
+        Ok(deadline.map(|d| d.checked_sub(r).unwrap_or(d)))
     };
     let mut stop_at = stop_for(&cur)?;
     let max_batches = if stop_at.is_some() { usize::MAX } else { 400 };
