@@ -5,11 +5,15 @@ rooms 6-14 m deep, grids of 1.5-3 m), a random start and end on each, both surve
 models, budgets of 25%, 50% and 100% of the building's total edge length; `auto` with its
 default 2 s limit, one core a plan (two plans at a time, pinned to cores 0 and 1).
 
-    python3 scripts/sweep_generated.py [SEED] [BUILDINGS] [--vary-radio]     (defaults 7 and 8)
+    python3 scripts/sweep_generated.py [SEED] [BUILDINGS] [--vary-radio] [--small]     (defaults 7 and 8)
 
 With `--vary-radio` each building also draws its number of access points (2-40) and pilot
 points (8-60) instead of the generator's defaults (a separate random stream, so the
 buildings, starts and ends of a seed are the same with and without it).
+
+With `--small` the buildings are drawn small (1-2 floors, 2-8 rooms a side, corridors of
+20-40 m, rooms 6-10 m deep, grids of 2-4 m) and those of more than 100 vertices are
+skipped: the floors where `auto` runs its small-building portfolio.
 
 Prints one line per row and flags a row where auto is below 1.05x coverage, uses less than
 95% of the budget, or takes longer than 2.35 s (wall, process start-up included); a
@@ -25,6 +29,7 @@ BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release"
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     vary_radio = "--vary-radio" in sys.argv[1:]
+    small = "--small" in sys.argv[1:]
     seed = int(args[0]) if len(args) > 0 else 7
     count = int(args[1]) if len(args) > 1 else 8
     rng = random.Random(seed)
@@ -32,9 +37,14 @@ def main():
     tmp = tempfile.mkdtemp()
     jobs = []
     for k in range(count):
-        o = dict(floors=rng.choice([1, 1, 2, 3]), rooms=rng.choice([2, 3, 5, 8, 10]),
-                 corridor=rng.choice([24, 40, 60, 90]), depth=rng.choice([6, 8, 10, 14]),
-                 grid=rng.choice([1.5, 2.0, 3.0]), seed=rng.randrange(1000))
+        if small:
+            o = dict(floors=rng.choice([1, 1, 2]), rooms=rng.choice([2, 3, 4, 5, 8]),
+                     corridor=rng.choice([20, 24, 30, 40]), depth=rng.choice([6, 8, 10]),
+                     grid=rng.choice([2.0, 3.0, 4.0]), seed=rng.randrange(1000))
+        else:
+            o = dict(floors=rng.choice([1, 1, 2, 3]), rooms=rng.choice([2, 3, 5, 8, 10]),
+                     corridor=rng.choice([24, 40, 60, 90]), depth=rng.choice([6, 8, 10, 14]),
+                     grid=rng.choice([1.5, 2.0, 3.0]), seed=rng.randrange(1000))
         path = os.path.join(tmp, f"b{k}.json")
         subprocess.run([BIN, "generate", "--out", path, "--name", f"b{k}", "--floors", str(o["floors"]),
                         "--rooms", str(o["rooms"]), "--corridor-length", str(o["corridor"]),
@@ -48,6 +58,8 @@ def main():
         total = sum(e.get("length", math.hypot(pos[e["a"]][0] - pos[e["b"]][0], pos[e["a"]][1] - pos[e["b"]][1]))
                     for e in b["edges"])
         ids = [v["id"] for v in b["vertices"]]
+        if small and len(ids) > 100:
+            continue
         start, end = rng.choice(ids), rng.choice(ids + [None])
         for model in ("robot", "human"):
             for frac in (0.25, 0.5, 1.0):
