@@ -134,8 +134,11 @@ impl Metric {
         // MB more on 3,161 vertices), and a group writes `GROUP` adjacent entries of each
         // row rather than one entry per row (a cache miss each).
         const GROUP: usize = 64;
-        let mut dist = vec![f64::INFINITY; n * n];
-        let mut next = vec![u32::MAX; n * n];
+        // Every entry is written below (each column's run sets every vertex, INFINITY and
+        // u32::MAX where unreachable), so the table starts as zeroed memory, which the
+        // allocator takes fresh from the system without a pass over it.
+        let mut dist = vec![0.0f64; n * n];
+        let mut next = vec![0u32; n * n];
         let adj = Adjacency::new(b);
         let mut t0 = 0;
         while t0 < n {
