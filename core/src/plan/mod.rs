@@ -326,8 +326,9 @@ fn best_so_far(problem: &Problem, run: &Run, termination: Termination) -> Result
 
 /// Estimated peak working set of planning `req` on `building` with `prior` extra
 /// observations, in bytes: the shortest-path table (12 bytes per vertex pair), the engine's
-/// vertex covariance and its factor (two `|V| x |V|` matrices; a third, the posterior of
-/// the pilot data, for the planners that grow walks incrementally), the pilot rows, and
+/// vertex covariance and its factor (two `|V| x |V|` matrices, the covariance not kept on
+/// floors of more than 1,024 vertices; a third, the posterior of the pilot data, for the
+/// planners that grow walks incrementally), the pilot rows, and
 /// per planning thread one dense matrix of `[pilot + prior, samples of a full-budget walk,
 /// vertices]` plus the incremental rows of such a walk (and, for recursive greedy, the
 /// posterior covariances of the partial walks it holds).
@@ -361,7 +362,10 @@ fn estimate_memory_with(
         Algorithm::Auto | Algorithm::Coverage
     ) && building.len() > auto::LARGE_VERTICES;
     let vertex_matrices = if whole_walks { 2.0 } else { 3.0 };
-    let engine = 8.0 * (vertex_matrices * nv * nv + nd * nd + 2.0 * nd * nv);
+    let engine = 8.0
+        * (vertex_matrices * nv * nv - crate::utility::unkept_covariance(building)
+            + nd * nd
+            + 2.0 * nd * nv);
     let incremental = if whole_walks {
         0.0
     } else {

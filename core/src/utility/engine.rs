@@ -70,15 +70,23 @@ impl Ctx {
 
 /// What the dense whole-walk path ([`super::dense`]) copies instead of recomputing: the
 /// prior observations' kernel blocks and `A`, all raw (not factored).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 struct Prior {
     pts: Points,
     /// `K_DD + N_D`, row-major `nd x nd` (upper triangle used).
     dd: Vec<f64>,
     /// `K_DV`, row-major `nd x nv`.
     dv: Vec<f64>,
-    /// `A = K_VV + sn2 I`, row-major `nv x nv` (upper triangle used).
+    /// `A = K_VV + sn2 I`, row-major `nv x nv` (upper triangle used), on parts of at
+    /// most [`DENSE_A_FROM`] vertices; empty on larger ones, which keep only `a_tail`
+    /// and compute other entries again when asked ([`Prior::a_row`]).
     a: Vec<f64>,
+    /// On parts beyond [`DENSE_A_FROM`] vertices: `A`'s columns `known..nv` of every row,
+    /// row-major `nv x (nv - known)`: all the S-side form reads of `A`.
+    a_tail: Vec<f64>,
+    /// The kernel and the part's vertices, to compute `A`'s entries that are not kept.
+    kernel: Kernel,
+    vpts: Vec<Point>,
     /// The upper Cholesky factor of `A` (`U^T U = A`), row-major `nv x nv`: the leading
     /// block of the joint factor in the "S side" form (see [`dense_gain`]).
     ua: Vec<f64>,
@@ -202,9 +210,9 @@ fn dense_gain_s_side<const FMA: bool>(
         if v < known {
             let u = v * prior.ua_ld;
             row[v..known].copy_from_slice(&prior.ua[u + v..u + known]);
-            row[known..nv].copy_from_slice(&prior.a[v * nv + known..(v + 1) * nv]);
+            prior.a_row(v, known, &mut row[known..nv]);
         } else {
-            row[v..nv].copy_from_slice(&prior.a[v * nv + v..(v + 1) * nv]);
+            prior.a_row(v, v, &mut row[v..nv]);
         }
         for (d, x) in row[nv..nv + nd].iter_mut().enumerate() {
             *x = prior.dv[d * nv + v];
@@ -248,7 +256,7 @@ fn dense_gain_v_side<const FMA: bool>(
     for v in 0..nv {
         let i = nd + nr + v;
         let row = &mut a[i * ld..(i + 1) * ld];
-        row[i..n].copy_from_slice(&prior.a[v * nv + v..(v + 1) * nv]);
+        prior.a_row(v, v, &mut row[i..n]);
         row[n..].fill(0.0);
     }
     let ld_post = dense::factor(ctx.isa, a, layout, nd + nr)?;
@@ -257,7 +265,7 @@ fn dense_gain_v_side<const FMA: bool>(
 
 /// Vertices (of one floor) beyond which `A` is factored by the dense factor (see
 /// [`Part::new`]).
-const DENSE_A_FROM: usize = 1024;
+pub(crate) const DENSE_A_FROM: usize = 1024;
 
 /// One floor's share of the dense path: its vertices and the prior observations on it.
 #[derive(Debug, Clone)]
@@ -267,6 +275,33 @@ struct Part {
     index: Vec<usize>,
     ctx: Ctx,
     prior: Prior,
+}
+
+/// `A`'s entries `(i, from..)` of the vertices `vpts` (`A = K_VV + sn2 I`) into `out`
+/// (`out.len()` of them). The one formula for them: entries computed again later
+/// ([`Prior::a_row`]) are the same bits as those first factored.
+fn a_entries(kernel: &Kernel, vpts: &[Point], i: usize, from: usize, out: &mut [f64]) {
+    for (k, x) in out.iter_mut().enumerate() {
+        let j = from + k;
+        *x = kernel.k(&vpts[i], &vpts[j]) + if i == j { kernel.sn2 } else { 0.0 };
+    }
+}
+
+impl Prior {
+    /// `A`'s entries `(v, from..from + out.len())` (`from >= v`: the upper triangle), from
+    /// what the part keeps or computed again.
+    fn a_row(&self, v: usize, from: usize, out: &mut [f64]) {
+        let nv = self.vpts.len();
+        if !self.a.is_empty() {
+            out.copy_from_slice(&self.a[v * nv + from..v * nv + from + out.len()]);
+        } else if from >= self.known {
+            let w = nv - self.known;
+            let at = v * w + from - self.known;
+            out.copy_from_slice(&self.a_tail[at..at + out.len()]);
+        } else {
+            a_entries(&self.kernel, &self.vpts, v, from, out);
+        }
+    }
 }
 
 impl Part {
@@ -291,29 +326,33 @@ impl Part {
             nv,
             isa,
         };
-        // A = K_VV + sn2 I (the upper triangle is what the kernels read).
-        let mut a = vec![0.0; nv * nv];
-        for i in 0..nv {
-            for j in i..nv {
-                a[i * nv + j] =
-                    kernel.k(&vpts[i], &vpts[j]) + if i == j { kernel.sn2 } else { 0.0 };
-            }
-        }
+        let known = nv / dense::KNOWN_STEP * dense::KNOWN_STEP;
         // ln det A, and the factor itself, kept for the S-side form. Up to DENSE_A_FROM
         // vertices by the blocked factor (the figures of every earlier release, bit for
         // bit); beyond, by the dense one in its own layout, at about twice the rate (0.45
-        // against 0.2 s on 3,161 vertices, a quarter of the set-up there).
+        // against 0.2 s on 3,161 vertices, a quarter of the set-up there). Beyond, `A`
+        // itself is not kept either, only its last columns (`a_tail`): 80 MB less on
+        // 3,161 vertices, and its entries computed again are the same bits.
         let not_pd = || Error::Numerical("K_VV + sn2 I is not positive definite".into());
-        let (a, ua, ua_ld, logdet_a) = if nv > DENSE_A_FROM {
+        let (a, a_tail, ua, ua_ld, logdet_a) = if nv > DENSE_A_FROM {
             let layout = dense::Layout::new(nv);
             let mut ua = vec![0.0; layout.len()];
+            let w = nv - known;
+            let mut a_tail = vec![0.0; nv * w];
             for i in 0..nv {
-                ua[i * layout.ld + i..i * layout.ld + nv]
-                    .copy_from_slice(&a[i * nv + i..(i + 1) * nv]);
+                let row = &mut ua[i * layout.ld..i * layout.ld + nv];
+                a_entries(kernel, vpts, i, i, &mut row[i..]);
+                let from = i.max(known);
+                a_tail[i * w + from - known..(i + 1) * w].copy_from_slice(&row[from..]);
             }
             let logdet_a = dense::factor(isa, &mut ua, layout, 0).ok_or_else(not_pd)?;
-            (a, ua, layout.ld, logdet_a)
+            (Vec::new(), a_tail, ua, layout.ld, logdet_a)
         } else {
+            // A = K_VV + sn2 I (the upper triangle is what the kernels read).
+            let mut a = vec![0.0; nv * nv];
+            for i in 0..nv {
+                a_entries(kernel, vpts, i, i, &mut a[i * nv + i..(i + 1) * nv]);
+            }
             let mut tmp = Factor {
                 sigma: a,
                 ..Factor::default()
@@ -323,7 +362,7 @@ impl Part {
                 DispatchOut::LogDet(Some(v)) => v,
                 _ => return Err(not_pd()),
             };
-            (tmp.sigma, ua, nv, logdet_a)
+            (tmp.sigma, Vec::new(), ua, nv, logdet_a)
         };
         let nd = obs.len();
         let mut prior = Prior {
@@ -331,9 +370,12 @@ impl Part {
             dd: vec![0.0; nd * nd],
             dv: vec![0.0; nd * nv],
             a,
+            a_tail,
+            kernel: *kernel,
+            vpts: vpts.to_vec(),
             ua,
             ua_ld,
-            known: nv / dense::KNOWN_STEP * dense::KNOWN_STEP,
+            known,
             logdet_a,
         };
         for (i, (p, noise)) in obs.iter().enumerate() {
@@ -740,16 +782,21 @@ impl UtilityEngine {
     /// `A = K_VV + sn2 I` of every vertex (upper triangle, row-major), from the floors'
     /// blocks (zero between floors).
     fn full_a(&self) -> Vec<f64> {
-        if let [one] = self.parts.as_slice() {
+        if let [one] = self.parts.as_slice()
+            && !one.prior.a.is_empty()
+        {
             return one.prior.a.clone();
         }
         let nv = self.ctx.nv;
         let mut a = vec![0.0; nv * nv];
+        let mut row = Vec::new();
         for part in &self.parts {
             let pn = part.index.len();
             for (ii, &i) in part.index.iter().enumerate() {
+                row.resize(pn - ii, 0.0);
+                part.prior.a_row(ii, ii, &mut row);
                 for (jj, &j) in part.index.iter().enumerate().skip(ii) {
-                    a[i * nv + j] = part.prior.a[ii * pn + jj];
+                    a[i * nv + j] = row[jj - ii];
                 }
             }
         }
@@ -1150,6 +1197,7 @@ pub(crate) mod tests {
             );
         }
         check_s_side(isa);
+        check_large_v_side(isa);
         check_floors(isa);
     }
 
@@ -1274,6 +1322,59 @@ pub(crate) mod tests {
     /// the dense path (the vertices' factor reused, below and beyond the size where the
     /// factorisation goes panel by panel): it agrees with SPEC 3's formula and with the
     /// incremental path.
+    /// The engine for `b` and SPEC 3's utility of `walk` by the reference, and whether the
+    /// dense path takes the S side for it (see [`dense_gain`]).
+    fn reference_case(
+        b: &Arc<Building>,
+        kernel: Kernel,
+        model: Surveyor,
+        walk: &[usize],
+        isa: Isa,
+    ) -> (UtilityEngine, f64, bool) {
+        let samples = crate::samples::sample_walk(b, walk, &model, &kernel).expect("samples");
+        let ns = samples.len() + b.pilot.len();
+        let known = b.len() / dense::KNOWN_STEP * dense::KNOWN_STEP;
+        let s_side = known > 0 && (known as f64).powi(3) > 1.5 * (ns as f64).powi(3);
+        let mut obs = pilot_observations(&b.pilot_points());
+        obs.extend(samples.iter().map(Observation::from));
+        let want = reference_utility(&kernel, &b.vertex_points(), &obs).expect("reference");
+        let all: Vec<usize> = (0..b.len()).collect();
+        let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
+        (e, want, s_side)
+    }
+
+    /// A floor of more than [`DENSE_A_FROM`] vertices, where the engine keeps `A`'s factor
+    /// and last columns but not `A`: a robot's serpentine over ten of its 33 rows has
+    /// more samples than the S side takes, so the V side computes `A`'s rows again, and
+    /// they must give SPEC 3's utility as the kept ones did.
+    fn check_large_v_side(isa: Isa) {
+        let kernel = Kernel::new(62.58, 7.93, 4.22);
+        let k = 33;
+        let b = grid(k, 1.5);
+        assert!(b.len() > DENSE_A_FROM);
+        let mut walk = Vec::new();
+        for j in 0..10 {
+            let row: Vec<usize> = (0..k).map(|i| i * k + j).collect();
+            if j % 2 == 0 {
+                walk.extend(row);
+            } else {
+                walk.extend(row.into_iter().rev());
+            }
+        }
+        let (e, want, s_side) = reference_case(&b, kernel, Surveyor::robot(), &walk, isa);
+        assert!(!s_side, "the walk's observations would take the S side");
+        assert!(
+            e.parts[0].prior.a.is_empty(),
+            "A is kept on {} vertices",
+            b.len()
+        );
+        let got = e.utility(&walk).expect("dense");
+        assert!(
+            (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+            "{isa:?} V side without A: {got} vs {want}"
+        );
+    }
+
     fn check_s_side(isa: Isa) {
         let kernel = Kernel::new(62.58, 7.93, 4.22);
         for (k, spacing, model) in [(12, 2.0, Surveyor::robot()), (33, 1.5, Surveyor::human())] {
@@ -1281,18 +1382,11 @@ pub(crate) mod tests {
             // Along the first row for six edges, then up one and back.
             let mut walk: Vec<usize> = (0..7).map(|i| i * k).collect();
             walk.extend([6 * k + 1, 5 * k + 1]);
-            let samples = crate::samples::sample_walk(&b, &walk, &model, &kernel).expect("samples");
-            let ns = samples.len() + b.pilot.len();
-            let known = b.len() / dense::KNOWN_STEP * dense::KNOWN_STEP;
+            let (e, want, s_side) = reference_case(&b, kernel, model, &walk, isa);
             assert!(
-                (known as f64).powi(3) > 1.5 * (ns as f64).powi(3),
-                "{k}: {ns} observations would not take the S side"
+                s_side,
+                "{k}: the walk's observations would not take the S side"
             );
-            let mut obs = pilot_observations(&b.pilot_points());
-            obs.extend(samples.iter().map(Observation::from));
-            let want = reference_utility(&kernel, &b.vertex_points(), &obs).expect("reference");
-            let all: Vec<usize> = (0..b.len()).collect();
-            let e = UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
             let (dense, inc) = dense_and_incremental(&e, &walk);
             for (what, got) in [("dense S side", dense), ("incremental", inc)] {
                 assert!(

@@ -19,14 +19,31 @@ pub use engine::{Mark, UtilityEngine, WalkState, merge_coincident};
 
 /// Estimated peak memory, bytes, of evaluating walks of at most `samples` samples each
 /// exactly on `building` with `threads` evaluations at a time: the engine's vertex
-/// covariance and its factor (two `|V| x |V|` matrices) and, per evaluation, one dense
+/// covariance and its factor (two `|V| x |V|` matrices, one on floors where `A` is not
+/// kept: [`unkept_covariance`]) and, per evaluation, one dense
 /// matrix of the pilot locations, the samples and the vertices. (The plan's estimate,
 /// [`crate::plan::estimate_memory`], adds what planners keep besides.)
 pub fn evaluation_memory(building: &crate::Building, samples: usize, threads: usize) -> u64 {
     let nv = building.len() as f64;
     let n = (building.pilot.len() + samples) as f64 + nv;
-    let bytes = 8.0 * (2.0 * nv * nv + threads.max(1) as f64 * n * n) + 16.0 * 1024.0 * 1024.0;
+    let vertex = 2.0 * nv * nv - unkept_covariance(building);
+    let bytes = 8.0 * (vertex + threads.max(1) as f64 * n * n) + 16.0 * 1024.0 * 1024.0;
     bytes.min(u64::MAX as f64) as u64
+}
+
+/// Entries (doubles) of the vertex covariance `A = K_VV + sn2 I` that the engine does not
+/// keep: on a floor of more than [`engine::DENSE_A_FROM`] vertices it keeps `A`'s factor
+/// and a few of its columns, not `A` itself (`n_f^2` entries less), so estimates that count
+/// `A` take them off.
+pub(crate) fn unkept_covariance(building: &crate::Building) -> f64 {
+    let mut floors: Vec<i64> = building.vertices.iter().map(|v| v.pos.floor).collect();
+    floors.sort_unstable();
+    floors
+        .chunk_by(|a, b| a == b)
+        .map(|f| f.len())
+        .filter(|&nf| nf > engine::DENSE_A_FROM)
+        .map(|nf| (nf * nf) as f64)
+        .sum()
 }
 
 /// Refuses to evaluate walks whose [`evaluation_memory`] exceeds `budget` bytes, before
