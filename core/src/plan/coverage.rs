@@ -173,6 +173,63 @@ impl NearEdges {
     }
 }
 
+/// Whether legs skip [`EdgeOrder`] and scan every edge: only for the test that compares
+/// the two.
+#[cfg(test)]
+fn full_scan_only() -> bool {
+    tests::FULL_SCAN.with(|f| f.get())
+}
+
+#[cfg(not(test))]
+#[inline(always)]
+fn full_scan_only() -> bool {
+    false
+}
+
+/// Length of a vertex's list in [`EdgeOrder`].
+pub const ORDER_LEN: usize = 128;
+
+/// For each vertex, its [`ORDER_LEN`] nearest edges (by the shortest distance to their
+/// nearer end, then by index), each list built on first use. A leg's step takes the
+/// nearest edge of the best class ([`leg_marked`]); the list lets it stop as soon as no
+/// edge further on can be better instead of reading the distances to every edge of the
+/// building, and it falls back to that scan when the list runs out first.
+#[derive(Debug)]
+pub struct EdgeOrder {
+    lists: Vec<std::sync::OnceLock<Box<[u32]>>>,
+}
+
+impl EdgeOrder {
+    /// An empty table for `n` vertices.
+    pub fn new(n: usize) -> Self {
+        EdgeOrder {
+            lists: (0..n).map(|_| std::sync::OnceLock::new()).collect(),
+        }
+    }
+
+    /// Vertex `v`'s list, built on first use.
+    pub fn of(&self, p: &Problem, v: usize) -> &[u32] {
+        self.lists[v].get_or_init(|| {
+            let m = &p.metric;
+            let mut all: Vec<(f64, u32)> = p
+                .building
+                .edges
+                .iter()
+                .enumerate()
+                .map(|(e, ed)| (m.dist(v, ed.a).min(m.dist(v, ed.b)), e as u32))
+                .filter(|(d, _)| d.is_finite())
+                .collect();
+            let by = |x: &(f64, u32), y: &(f64, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+            if all.len() > ORDER_LEN {
+                all.select_nth_unstable_by(ORDER_LEN - 1, by);
+                all.truncate(ORDER_LEN);
+            }
+            all.sort_unstable_by(by);
+            all.into_iter().map(|(_, e)| e).collect()
+        })
+    }
+}
+
 /// The midpoint of the edge from `a` to `b`, on the lower of its floors.
 fn midpoint(b: &crate::building::Building, a: usize, c: usize) -> Point {
     let (pa, pb) = (&b.vertices[a].pos, &b.vertices[c].pos);
@@ -196,6 +253,8 @@ pub(in crate::plan) struct Marks<'a> {
     table: Option<&'a NearEdges>,
     mids: std::sync::Arc<Vec<Point>>,
     radius: f64,
+    /// Edges near no walked edge (`near[e] == 0`): the edges a leg prefers.
+    free: usize,
 }
 
 impl<'a> Marks<'a> {
@@ -218,6 +277,7 @@ impl<'a> Marks<'a> {
             table,
             mids: std::sync::Arc::new(mids),
             radius,
+            free: b.edges.len(),
         }
     }
 
@@ -236,7 +296,12 @@ impl<'a> Marks<'a> {
 
     /// Adds `by` (1 or -1) to the near count of every edge within the radius of `e`.
     fn add_near(&mut self, u: usize, v: usize, e: usize, by: i32) {
-        let step = |x: &mut u32| *x = x.wrapping_add_signed(by);
+        let mut free = self.free;
+        let mut step = |x: &mut u32| {
+            let was = *x;
+            *x = x.wrapping_add_signed(by);
+            free = free + usize::from(*x == 0) - usize::from(was == 0);
+        };
         step(&mut self.near[e]);
         if let Some(t) = self.table {
             for k in t.within(e, self.radius) {
@@ -253,6 +318,7 @@ impl<'a> Marks<'a> {
                 }
             }
         }
+        self.free = free;
     }
 
     /// Marks the edge from `u` to its neighbour `v` as walked (once more).
@@ -432,10 +498,12 @@ pub(in crate::plan) fn leg_marked(
                 .count()
         };
         let mut pool: Vec<(usize, usize, usize)> = Vec::new();
-        for (e, ed) in b.edges.iter().enumerate() {
-            if marks.is_walked(e) {
-                continue;
-            }
+        // Offers edge `e` (not walked) to `best` and, on a randomised leg's first step,
+        // to `pool`.
+        let consider = |e: usize,
+                            best: &mut Option<(usize, f64, usize, usize, usize)>,
+                            pool: &mut Vec<(usize, usize, usize)>| {
+            let ed = &b.edges[e];
             let (da, db) = (m.dist(cur, ed.a), m.dist(cur, ed.b));
             let (x, y, reach) = if da <= db {
                 (ed.a, ed.b, da)
@@ -443,7 +511,7 @@ pub(in crate::plan) fn leg_marked(
                 (ed.b, ed.a, db)
             };
             if !reach.is_finite() {
-                continue;
+                return;
             }
             let mut class = usize::from(marks.is_near(e));
             if spec.avoid_reversals
@@ -455,11 +523,12 @@ pub(in crate::plan) fn leg_marked(
                     class += 2;
                 }
             }
-            if let Some((bc, br, ..)) = best
+            let randomised = first && rng.is_some();
+            if let Some((bc, br, ..)) = *best
                 && (class > bc || (class == bc && (reach > br || (reach == br && !spec.open_ties))))
-                && rng.is_none()
+                && !randomised
             {
-                continue;
+                return;
             }
             // From the end's row (contiguous), not `y`'s column: on the first step of a
             // randomised leg every unwalked edge gets here, and a column read is a cache
@@ -467,9 +536,9 @@ pub(in crate::plan) fn leg_marked(
             // symmetric (to rounding, far below BUDGET_EPS).
             let total = len + reach + ed.length + m.dist(spec.to, y);
             if spec.any_fit && !fits(total) {
-                continue;
+                return;
             }
-            if first && rng.is_some() && class % 2 == 0 && fits(total) {
+            if randomised && class % 2 == 0 && fits(total) {
                 pool.push((e, x, y));
             }
             if best.is_none_or(|(bc, br, _, _, by)| {
@@ -480,7 +549,38 @@ pub(in crate::plan) fn leg_marked(
                                 && reach == br
                                 && open(&marks, y) > open(&marks, by))))
             }) {
-                best = Some((class, reach, e, x, y));
+                *best = Some((class, reach, e, x, y));
+            }
+        };
+        // The nearest edges first, while an edge further on could still be better: the
+        // best class there can be is 0 while some edge is near no walked edge, else 1.
+        // The same edge as the scan below would find (same order of ties: by distance,
+        // then by index), or, when the list runs out first, the scan itself.
+        let mut settled = false;
+        if !(first && rng.is_some()) && !full_scan_only() {
+            let floor = usize::from(marks.free == 0);
+            for &e in p.nearest_edges(cur) {
+                let e = e as usize;
+                if marks.is_walked(e) {
+                    continue;
+                }
+                if let Some((bc, br, ..)) = best {
+                    let ed = &b.edges[e];
+                    let reach = m.dist(cur, ed.a).min(m.dist(cur, ed.b));
+                    if bc == floor && reach > br {
+                        settled = true;
+                        break;
+                    }
+                }
+                consider(e, &mut best, &mut pool);
+            }
+        }
+        if !settled {
+            best = None;
+            for e in 0..b.edges.len() {
+                if !marks.is_walked(e) {
+                    consider(e, &mut best, &mut pool);
+                }
             }
         }
         let pick = match (first, rng.as_deref_mut()) {
@@ -655,6 +755,90 @@ pub(super) mod tests {
             e.join(",")
         );
         Arc::new(Building::from_json(&text, "lat").expect("valid"))
+    }
+
+    thread_local! {
+        /// Set by the test that compares a leg's nearest-edge lists with a scan.
+        pub(super) static FULL_SCAN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// A `cols` x `rows` grid of 2 m cells (vertex `cols r + c` at `(2 c, 2 r)`).
+    fn grid(cols: usize, rows: usize) -> Arc<Building> {
+        let mut v = Vec::new();
+        let mut e = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                v.push(format!(r#"{{"id":"v{r}_{c}","x":{},"y":{}}}"#, 2 * c, 2 * r));
+                if c > 0 {
+                    e.push(format!(r#"{{"a":"v{r}_{}","b":"v{r}_{c}"}}"#, c - 1));
+                }
+                if r > 0 {
+                    e.push(format!(r#"{{"a":"v{}_{c}","b":"v{r}_{c}"}}"#, r - 1));
+                }
+            }
+        }
+        let text = format!(
+            r#"{{"format":"survey-building/1","name":"grid","vertices":[{}],"edges":[{}],
+               "pilot":[{{"x":0,"y":0,"rss":{{"a":-50}}}}]}}"#,
+            v.join(","),
+            e.join(",")
+        );
+        Arc::new(Building::from_json(&text, "grid").expect("valid"))
+    }
+
+    /// A leg that reads each vertex's nearest edges in order ([`EdgeOrder`]) is the leg
+    /// that scans every edge at every step, on a grid of more edges than a list holds:
+    /// for novelty radii of none, within and beyond the table, both tie rules, reversal
+    /// avoidance, either fit rule, randomised or not, from the middle of walks.
+    #[test]
+    fn a_leg_by_nearest_edge_lists_is_the_leg_by_a_scan_of_every_edge() {
+        use rand::{RngExt, SeedableRng};
+        let b = grid(16, 12);
+        assert!(b.edges.len() > 2 * ORDER_LEN, "{}", b.edges.len());
+        let k = Kernel {
+            sf2: 10.0,
+            ell: 6.0,
+            sn2: 1.0,
+        };
+        let p = Problem::new(b.clone(), k, Surveyor::robot(), 0, 0, 400.0).expect("problem");
+        let run = Run::new(Control::new(), None);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let mut settled_by_lists = 0;
+        for case in 0..240 {
+            let context = random_walk(&b, rng.random_range(0..120), &mut rng);
+            let spec = Leg {
+                from: context[rng.random_range(0..context.len())],
+                prev: None,
+                to: rng.random_range(0..b.len()),
+                budget: rng.random_range(10.0..160.0),
+                radius: [0.0, 3.0, 20.0][case % 3],
+                any_fit: rng.random_bool(0.7),
+                avoid_reversals: rng.random_bool(0.5),
+                open_ties: rng.random_bool(0.5),
+            };
+            let spec = Leg {
+                prev: b.neighbours(spec.from).first().map(|&(w, _)| w),
+                ..spec
+            };
+            let seed: Option<u64> = rng.random_bool(0.5).then(|| rng.random());
+            let build = |full: bool| {
+                FULL_SCAN.with(|f| f.set(full));
+                let mut r = seed.map(rand_chacha::ChaCha8Rng::seed_from_u64);
+                let w = leg(&p, &spec, &context, r.as_mut(), &run);
+                FULL_SCAN.with(|f| f.set(false));
+                w
+            };
+            let (by_lists, by_scan) = (build(false), build(true));
+            assert_eq!(by_lists, by_scan, "case {case}: {spec:?}");
+            settled_by_lists += usize::from(by_lists.len() > 2);
+            // The count of edges near nothing walked is kept right.
+            let mut m = Marks::new(&p, spec.radius);
+            m.walk_all(&context, 1);
+            assert_eq!(m.free, m.near.iter().filter(|&&n| n == 0).count());
+            m.unwalk_all(&context[..context.len() / 2]);
+            assert_eq!(m.free, m.near.iter().filter(|&&n| n == 0).count());
+        }
+        assert!(settled_by_lists > 100, "{settled_by_lists}");
     }
 
     /// A robot's closed walk from vertex 0 within `budget` metres.

@@ -246,6 +246,7 @@ fn plan_validated(
         end,
         budget: req.budget,
         near: Arc::default(),
+        order: Arc::default(),
     };
     let solver = solver_for(
         req.settings.algorithm,

@@ -12,7 +12,7 @@ use crate::surveyor::Surveyor;
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
-use super::coverage::NearEdges;
+use super::coverage::{EdgeOrder, NearEdges};
 use super::{BUDGET_EPS, Metric, Run, Termination};
 
 /// One planning instance: the building with its engine and metric closure, and the
@@ -28,6 +28,9 @@ pub struct Problem {
     /// The spread constructions' table of nearby edges, built on first use and shared by
     /// clones (see [`Problem::near_edges`]).
     pub near: Arc<OnceLock<Option<NearEdges>>>,
+    /// Each vertex's nearest edges in order, built per vertex on first use and shared by
+    /// clones (see [`Problem::nearest_edges`]).
+    pub order: Arc<OnceLock<EdgeOrder>>,
 }
 
 impl Problem {
@@ -50,6 +53,7 @@ impl Problem {
             end,
             budget,
             near: Arc::default(),
+            order: Arc::default(),
         })
     }
 
@@ -71,6 +75,15 @@ impl Problem {
         self.near
             .get_or_init(|| NearEdges::new(&self.building, self.engine.kernel().ell))
             .as_ref()
+    }
+
+    /// The edges nearest to vertex `v` ([`EdgeOrder`]): at most
+    /// [`super::coverage::ORDER_LEN`] of them, by the distance from `v` to their nearer
+    /// end, then by index.
+    pub fn nearest_edges(&self, v: usize) -> &[u32] {
+        self.order
+            .get_or_init(|| EdgeOrder::new(self.building.len()))
+            .of(self, v)
     }
 
     /// Whether a length fits the budget.
