@@ -735,16 +735,22 @@ pub(super) mod tests {
     /// A 4 x 3 lattice with columns at `xs` and rows at `ys` (vertex `4 r + c` at
     /// `(xs[c], ys[r])`), pilot data at the origin.
     pub(in crate::plan) fn lattice_at(xs: [f64; 4], ys: [f64; 3]) -> Arc<Building> {
+        grid_at(&xs, &ys)
+    }
+
+    /// A grid with columns at `xs` and rows at `ys` (vertex `xs.len() r + c` at
+    /// `(xs[c], ys[r])`), pilot data at the origin.
+    fn grid_at(xs: &[f64], ys: &[f64]) -> Arc<Building> {
         let mut v = Vec::new();
         let mut e = Vec::new();
         for (r, &y) in ys.iter().enumerate() {
             for (c, &x) in xs.iter().enumerate() {
-                v.push(format!(r#"{{"id":"v{r}{c}","x":{x},"y":{y}}}"#));
+                v.push(format!(r#"{{"id":"v{r}_{c}","x":{x},"y":{y}}}"#));
                 if c > 0 {
-                    e.push(format!(r#"{{"a":"v{r}{}","b":"v{r}{c}"}}"#, c - 1));
+                    e.push(format!(r#"{{"a":"v{r}_{}","b":"v{r}_{c}"}}"#, c - 1));
                 }
                 if r > 0 {
-                    e.push(format!(r#"{{"a":"v{}{c}","b":"v{r}{c}"}}"#, r - 1));
+                    e.push(format!(r#"{{"a":"v{}_{c}","b":"v{r}_{c}"}}"#, r - 1));
                 }
             }
         }
@@ -762,30 +768,6 @@ pub(super) mod tests {
         pub(super) static FULL_SCAN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }
 
-    /// A `cols` x `rows` grid of 2 m cells (vertex `cols r + c` at `(2 c, 2 r)`).
-    fn grid(cols: usize, rows: usize) -> Arc<Building> {
-        let mut v = Vec::new();
-        let mut e = Vec::new();
-        for r in 0..rows {
-            for c in 0..cols {
-                v.push(format!(r#"{{"id":"v{r}_{c}","x":{},"y":{}}}"#, 2 * c, 2 * r));
-                if c > 0 {
-                    e.push(format!(r#"{{"a":"v{r}_{}","b":"v{r}_{c}"}}"#, c - 1));
-                }
-                if r > 0 {
-                    e.push(format!(r#"{{"a":"v{}_{c}","b":"v{r}_{c}"}}"#, r - 1));
-                }
-            }
-        }
-        let text = format!(
-            r#"{{"format":"survey-building/1","name":"grid","vertices":[{}],"edges":[{}],
-               "pilot":[{{"x":0,"y":0,"rss":{{"a":-50}}}}]}}"#,
-            v.join(","),
-            e.join(",")
-        );
-        Arc::new(Building::from_json(&text, "grid").expect("valid"))
-    }
-
     /// A leg that reads each vertex's nearest edges in order ([`EdgeOrder`]) is the leg
     /// that scans every edge at every step, on a grid of more edges than a list holds:
     /// for novelty radii of none, within and beyond the table, both tie rules, reversal
@@ -793,7 +775,8 @@ pub(super) mod tests {
     #[test]
     fn a_leg_by_nearest_edge_lists_is_the_leg_by_a_scan_of_every_edge() {
         use rand::{RngExt, SeedableRng};
-        let b = grid(16, 12);
+        let at = |n: usize| (0..n).map(|i| 2.0 * i as f64).collect::<Vec<f64>>();
+        let b = grid_at(&at(16), &at(12));
         assert!(b.edges.len() > 2 * ORDER_LEN, "{}", b.edges.len());
         let k = Kernel {
             sf2: 10.0,
