@@ -112,6 +112,17 @@ pub fn is_turn_checkin(
     turn_angle_deg(&a, &b, &c) > threshold_deg
 }
 
+/// A [`WalkSampler`]'s state at one vertex of a walk ([`WalkSampler::checkpoint`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Checkpoint {
+    prev: Option<usize>,
+    at: usize,
+    length: f64,
+    next_k: u64,
+    last_checkin: f64,
+    pending: Option<Sample>,
+}
+
 /// Incremental sample placement along a growing walk.
 ///
 /// Feed vertices with [`push`](Self::push); each call returns the samples that became
@@ -263,6 +274,36 @@ impl WalkSampler {
         Ok(())
     }
 
+    /// The sampler's state at the current end vertex: enough to go on from there
+    /// ([`WalkSampler::resume`]) without walking the vertices before it again.
+    pub fn checkpoint(&self) -> Checkpoint {
+        let n = self.walk.len();
+        Checkpoint {
+            prev: n.checked_sub(2).map(|i| self.walk[i]),
+            at: self.walk[n - 1],
+            length: self.length,
+            next_k: self.next_k,
+            last_checkin: self.last_checkin,
+            pending: self.pending,
+        }
+    }
+
+    /// A sampler in the state `cp` was taken in: pushing the same vertices from there
+    /// gives the same samples, bit for bit, as the sampler `cp` came from. Its
+    /// [`WalkSampler::walk`] holds the checkpoint's last two vertices only.
+    pub fn resume(cp: &Checkpoint, model: Surveyor, kernel: Kernel) -> Self {
+        WalkSampler {
+            model,
+            kernel,
+            spacing: model.spacing(),
+            walk: cp.prev.into_iter().chain([cp.at]).collect(),
+            length: cp.length,
+            next_k: cp.next_k,
+            last_checkin: cp.last_checkin,
+            pending: cp.pending,
+        }
+    }
+
     /// The pending sample with the noise it has if the walk ends at the current vertex.
     pub fn pending_final(&self) -> Option<Sample> {
         self.pending.map(|p| self.make(p.pos, p.arc))
@@ -280,6 +321,32 @@ pub fn sample_walk(
     model: &Surveyor,
     kernel: &Kernel,
 ) -> Result<Vec<Sample>> {
+    sample_walk_into(building, walk, model, kernel, None)
+}
+
+/// [`sample_walk`], with the sampler's state at each vertex of the walk (what a walk
+/// that shares the first vertices can be sampled on from: [`WalkSampler::resume`]).
+///
+/// # Errors
+/// As [`sample_walk`].
+pub fn sample_walk_checkpoints(
+    building: &Building,
+    walk: &[usize],
+    model: &Surveyor,
+    kernel: &Kernel,
+) -> Result<(Vec<Sample>, Vec<Checkpoint>)> {
+    let mut cps = Vec::with_capacity(walk.len());
+    let samples = sample_walk_into(building, walk, model, kernel, Some(&mut cps))?;
+    Ok((samples, cps))
+}
+
+fn sample_walk_into(
+    building: &Building,
+    walk: &[usize],
+    model: &Surveyor,
+    kernel: &Kernel,
+    mut checkpoints: Option<&mut Vec<Checkpoint>>,
+) -> Result<Vec<Sample>> {
     let Some(&start) = walk.first() else {
         return Err(Error::InvalidWalk {
             step: 0,
@@ -291,8 +358,14 @@ pub fn sample_walk(
     model.validate()?;
     let mut sampler = WalkSampler::new(building, start, *model, *kernel);
     let mut out = Vec::new();
+    if let Some(c) = checkpoints.as_mut() {
+        c.push(sampler.checkpoint());
+    }
     for &v in &walk[1..] {
         sampler.push(building, v, &mut out)?;
+        if let Some(c) = checkpoints.as_mut() {
+            c.push(sampler.checkpoint());
+        }
     }
     out.extend(sampler.pending_final());
     Ok(out)
@@ -308,6 +381,49 @@ mod tests {
           "vertices":[{"id":"a","x":0,"y":0},{"id":"b","x":2,"y":0},{"id":"c","x":2,"y":1.5},{"id":"d","x":4,"y":0}],
           "edges":[{"a":"a","b":"b"},{"a":"b","b":"c"},{"a":"b","b":"d"}]}"#;
         Building::from_json(text, "line").expect("valid")
+    }
+
+    /// A sampler resumed at any vertex's checkpoint and fed the rest of the walk gives
+    /// the whole walk's samples from that vertex on, bit for bit, for both models (a
+    /// person's label noise depends on the last check-in, which the checkpoint carries).
+    #[test]
+    fn a_sampler_resumed_at_a_checkpoint_gives_the_rest_of_the_walks_samples() {
+        let b = line();
+        let walk = b
+            .resolve_walk(&["a", "b", "c", "b", "d", "b", "a", "b", "c"])
+            .expect("walk");
+        let k = Kernel::new(20.0, 5.0, 2.0);
+        let slow = match Surveyor::human() {
+            Surveyor::Human {
+                step_length_m,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+                ..
+            } => Surveyor::Human {
+                step_length_m,
+                speed_mps: 0.35,
+                scan_interval_s,
+                step_error,
+                turn_threshold_deg,
+            },
+            robot => robot,
+        };
+        for model in [Surveyor::robot(), Surveyor::human(), slow] {
+            let (all, cps) = sample_walk_checkpoints(&b, &walk, &model, &k).expect("samples");
+            assert_eq!(all, sample_walk(&b, &walk, &model, &k).expect("samples"));
+            assert_eq!(cps.len(), walk.len());
+            for (i, cp) in cps.iter().enumerate() {
+                let mut s = WalkSampler::resume(cp, model, k);
+                let mut out = Vec::new();
+                for &v in &walk[i + 1..] {
+                    s.push(&b, v, &mut out).expect("push");
+                }
+                out.extend(s.pending_final());
+                let from = all.partition_point(|x| x.arc < cp.length - ARC_EPS);
+                assert_eq!(out, all[from..], "{model:?} from vertex {i}");
+            }
+        }
     }
 
     /// A walking speed of -1 m/s (the bindings pass a profile as given) was sampled

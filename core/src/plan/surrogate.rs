@@ -29,7 +29,7 @@ use super::Problem;
 use crate::Result;
 use crate::building::Building;
 use crate::gp::{Kernel, Point};
-use crate::samples::{Surveyor, sample_walk};
+use crate::samples::{Checkpoint, Surveyor, WalkSampler, sample_walk_checkpoints};
 
 /// Observations each vertex is conditioned on.
 pub const OBS_NEIGHBOURS: usize = 6;
@@ -118,7 +118,9 @@ impl Surrogate {
     /// The surrogate value of `walk` with what it does not depend on kept ([`Frame`]),
     /// for scoring walks that differ from it in one stretch ([`Surrogate::value_near`]).
     pub fn frame(&self, walk: &[usize]) -> Result<Frame> {
-        let samples = sample_walk(&self.building, walk, &self.model, &self.kernel)?;
+        // The walk's samples, and the sampler's state at each vertex (for `value_near`).
+        let (samples, checkpoints) =
+            sample_walk_checkpoints(&self.building, walk, &self.model, &self.kernel)?;
         let mut obs = self.fixed.clone();
         obs.extend(
             samples
@@ -148,6 +150,7 @@ impl Surrogate {
             walk: walk.to_vec(),
             arcs: vertex_arcs(&self.building, walk),
             sample_arcs: samples.iter().map(|s| s.arc).collect(),
+            checkpoints,
             fixed: self.fixed.len(),
             obs,
             trees,
@@ -201,8 +204,23 @@ impl Surrogate {
             ),
             _ => ([(a - 1, nb - z), (0, 0)], [(a - 1, nw - z), (0, 0)]),
         };
-        let samples = sample_walk(&self.building, walk, &self.model, &self.kernel)?;
-        let arcs = vertex_arcs(&self.building, walk);
+        // `walk`'s samples and vertex arcs from vertex `a - 1`, where the changes begin
+        // (the shared first stretch is the frame's), to the last changed vertex: the
+        // frame's sampler state there, then `walk`'s own vertices.
+        let from = a - 1;
+        let last = rw[0].1.max(rw[1].1);
+        let mut samples = Vec::new();
+        let mut sampler = WalkSampler::resume(&frame.checkpoints[from], self.model, self.kernel);
+        let mut arcs = Vec::with_capacity(last + 1 - from);
+        let mut arc = frame.arcs[from];
+        arcs.push(arc);
+        for w in walk[from..=last].windows(2) {
+            sampler.push(&self.building, w[1], &mut samples)?;
+            arc += self.building.walk_length(w);
+            arcs.push(arc);
+        }
+        // Arc at vertex `i` of `walk` (from `from` on).
+        let arc_at = |i: usize| arcs[i - from];
         // Samples strictly inside a stretch (by arc length; those at its end vertices
         // are the shared ones).
         const EPS: f64 = 1e-6;
@@ -226,7 +244,7 @@ impl Surrogate {
                 skip[k] = ((frame.fixed + lo) as u32, (frame.fixed + hi) as u32);
             }
             if w1 > w0 {
-                let (lo, hi) = inside(&walk_at, arcs[w0], arcs[w1]);
+                let (lo, hi) = inside(&walk_at, arc_at(w0), arc_at(w1));
                 added.extend(
                     samples[lo..hi]
                         .iter()
@@ -371,6 +389,9 @@ pub struct Frame {
     arcs: Vec<f64>,
     /// Arc length of each sample of the walk.
     sample_arcs: Vec<f64>,
+    /// The sampler's state at each vertex of the walk: a walk that shares the first
+    /// vertices is sampled from where it leaves them.
+    checkpoints: Vec<Checkpoint>,
     /// Observations before the samples in `obs` (pilot and prior).
     fixed: usize,
     obs: Vec<(Point, f64)>,
