@@ -501,8 +501,8 @@ pub(in crate::plan) fn leg_marked(
         // Offers edge `e` (not walked) to `best` and, on a randomised leg's first step,
         // to `pool`.
         let consider = |e: usize,
-                            best: &mut Option<(usize, f64, usize, usize, usize)>,
-                            pool: &mut Vec<(usize, usize, usize)>| {
+                        best: &mut Option<(usize, f64, usize, usize, usize)>,
+                        pool: &mut Vec<(usize, usize, usize)>| {
             let ed = &b.edges[e];
             let (da, db) = (m.dist(cur, ed.a), m.dist(cur, ed.b));
             let (x, y, reach) = if da <= db {

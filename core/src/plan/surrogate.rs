@@ -509,7 +509,11 @@ fn longest_common_run(a: &[usize], b: &[usize]) -> Option<(usize, usize, usize)>
             if i > 0 && j > 0 && a[i - 1] == b[j - 1] {
                 continue; // inside a run followed from its start
             }
-            let len = a[i..].iter().zip(&b[j..]).take_while(|(x, y)| x == y).count();
+            let len = a[i..]
+                .iter()
+                .zip(&b[j..])
+                .take_while(|(x, y)| x == y)
+                .count();
             let end = (i + len - 1, j + len - 1);
             if best.is_none_or(|(_, _, bl)| len > bl || (len == bl && end < best_end)) {
                 best = Some((i, j, len));
