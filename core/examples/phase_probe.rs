@@ -22,15 +22,7 @@ fn main() -> trailprint::Result<()> {
     let budget: f64 = a[2]
         .parse()
         .map_err(|_| Error::InvalidRequest(format!("budget: {}", a[2])))?;
-    let text = std::fs::read_to_string(&a[4]).map_err(|e| Error::InvalidRequest(format!("{e}")))?;
-    let plan: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| Error::InvalidRequest(format!("{e}")))?;
-    let mut walk = plan["walk"]
-        .as_array()
-        .ok_or_else(|| Error::InvalidRequest("no walk".into()))?
-        .iter()
-        .map(|v| b.require_vertex(v.as_str().unwrap_or("")))
-        .collect::<trailprint::Result<Vec<usize>>>()?;
+    let mut walk = cases::plan_walk(&b, &a[4])?;
     let (start, end) = (walk[0], *walk.last().expect("walk"));
     let p = Problem::new(
         b.clone(),

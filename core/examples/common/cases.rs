@@ -90,3 +90,17 @@ pub fn table_head(columns: &[&str]) {
     println!("| {} |", columns.join(" | "));
     println!("|{}", "---|".repeat(columns.len()));
 }
+
+/// The walk of a saved plan (`trailprint plan --json`) as vertex indices of `b`.
+pub fn plan_walk(b: &Building, path: &str) -> trailprint::Result<Vec<usize>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| trailprint::Error::InvalidRequest(format!("{path}: {e}")))?;
+    let plan: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| trailprint::Error::InvalidRequest(format!("{path}: {e}")))?;
+    plan["walk"]
+        .as_array()
+        .ok_or_else(|| trailprint::Error::InvalidRequest(format!("{path}: no walk")))?
+        .iter()
+        .map(|v| b.require_vertex(v.as_str().unwrap_or("")))
+        .collect()
+}

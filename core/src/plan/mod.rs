@@ -396,6 +396,13 @@ fn estimate_memory_with(
         0.0
     };
     let per_thread = 8.0 * (n * n + incremental + marks + walk_states);
+    // The large-building search's exact phase keeps its walk's factorisation, at most
+    // NEAR_BASE_MAX doubles ([`crate::utility::NearBase`]).
+    let near_base = if whole_walks {
+        8.0 * (n * n).min(crate::utility::engine::NEAR_BASE_MAX as f64)
+    } else {
+        0.0
+    };
     // A fixed allowance for the process, the building and the search's own tables.
     let fixed = 16.0 * 1024.0 * 1024.0;
     let root_state = if walk_states > 0.0 {
@@ -403,7 +410,8 @@ fn estimate_memory_with(
     } else {
         0.0
     };
-    (metric + engine + root_state + threads * per_thread + fixed).min(u64::MAX as f64) as u64
+    (metric + engine + root_state + near_base + threads * per_thread + fixed).min(u64::MAX as f64)
+        as u64
 }
 
 /// The number of planning threads whose estimated working set fits the request's memory

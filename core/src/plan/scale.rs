@@ -682,6 +682,12 @@ pub fn plan_large_with(
     // `walk`'s marks for each radius of `radii` (built when a move first needs them).
     let mut marks: Vec<Option<Marks>> = vec![None; radii.len()];
     let mut marks_of: Option<Vec<usize>> = None;
+    // In the exact phase (unscreened), `walk`'s factorisation: each candidate of a batch
+    // is drawn from `walk` and computes only the rows from its first changed sample
+    // ([`UtilityEngine::utility_near`](crate::utility::UtilityEngine::utility_near)).
+    let mut near: Option<crate::utility::NearBase> = None;
+    // Off once a base keeps nothing to start from (see `NearBase::reuses`).
+    let mut near_off = false;
     let search_start = Instant::now();
     while stats.batches < max_batches && !run.should_stop() {
         if stop_at.is_some_and(|t| Instant::now() >= t) {
@@ -789,6 +795,15 @@ pub fn plan_large_with(
                 marks[k] = Some(mk);
             }
         }
+        let exact_near = exact_phase && !screened && !near_off;
+        if exact_near && near.as_ref().is_none_or(|b| b.walk() != walk.as_slice()) {
+            let b = p.engine.near_base(&walk)?;
+            stats.exact_evals += 1;
+            near_off = !b.reuses();
+            near = Some(b);
+        }
+        let exact_near = exact_near && !near_off;
+        let nb = near.as_ref().filter(|_| exact_near);
         let fr = frame.as_ref();
         // (walk, score, exact utility when the score is exact)
         let cands: Vec<(Vec<usize>, f64, Option<f64>)> = moves
@@ -803,7 +818,10 @@ pub fn plan_large_with(
                         Some((w, sc, None))
                     }
                     _ => {
-                        let u = p.utility(&w).ok()?;
+                        let u = match nb {
+                            Some(b) => p.engine.utility_near(b, &w).ok()?,
+                            None => p.utility(&w).ok()?,
+                        };
                         let sc = penalised(p, &w, u);
                         Some((w, sc, Some(u)))
                     }
@@ -851,6 +869,18 @@ pub fn plan_large_with(
         if let Some((w, s, u)) = best.clone()
             && s > cur_s * (1.0 + 1e-9)
         {
+            // A walk scored from `walk`'s factorisation is offered with its whole
+            // evaluation (the same to rounding), which is the next batch's base.
+            let u = match u {
+                Some(_) if exact_near => {
+                    let b = p.engine.near_base(&w)?;
+                    stats.exact_evals += 1;
+                    let x = b.utility();
+                    near = Some(b);
+                    Some(x)
+                }
+                u => u,
+            };
             if let Some(u) = u {
                 p.offer(run, &w, u);
                 if offered.as_ref().is_none_or(|(_, bu)| u > *bu) {

@@ -33,6 +33,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+#[path = "near.rs"]
+mod near;
+pub use near::{BASE_MAX as NEAR_BASE_MAX, NearBase};
+
 use super::blocked;
 use super::dense;
 use super::reference::Observation;
@@ -148,38 +152,8 @@ fn dense_gain<const FMA: bool>(ctx: &Ctx, prior: &Prior, obs: &[(Point, f64)]) -
     out
 }
 
-/// Writes the rows of `K_SS + N_S` (`S = [D, obs]`, upper triangle) into rows and columns
-/// `o..o + |S|` of the dense buffer of leading dimension `ld`, and zeroes each row from
-/// column `o + |S|` to `ld`.
-#[inline(always)]
-fn fill_observations<const FMA: bool>(
-    ctx: &Ctx,
-    prior: &Prior,
-    obs: &[(Point, f64)],
-    rp: &Points,
-    a: &mut [f64],
-    ld: usize,
-    o: usize,
-) {
-    let nd = prior.pts.len();
-    let nr = obs.len();
-    let ns = nd + nr;
-    for i in 0..nd {
-        let row = &mut a[(o + i) * ld..(o + i + 1) * ld];
-        row[o + i..o + nd].copy_from_slice(&prior.dd[i * nd + i..(i + 1) * nd]);
-        ctx.kernel_row::<FMA>(prior.pts.at(i), rp, 0, &mut row[o + nd..o + ns]);
-        row[o + ns..].fill(0.0);
-    }
-    for (r, (_, noise)) in obs.iter().enumerate() {
-        let i = nd + r;
-        let row = &mut a[(o + i) * ld..(o + i + 1) * ld];
-        ctx.kernel_row::<FMA>(rp.at(r), rp, r, &mut row[o + i..o + ns]);
-        row[o + i] += ctx.sn2 + noise;
-        row[o + ns..].fill(0.0);
-    }
-}
-
-/// The S-side form of [`dense_gain`].
+/// The S-side form of [`dense_gain`], in the thread's dense buffer: the observations'
+/// own matrix first, then the joint one over it.
 #[inline(always)]
 fn dense_gain_s_side<const FMA: bool>(
     ctx: &Ctx,
@@ -188,41 +162,105 @@ fn dense_gain_s_side<const FMA: bool>(
     rp: &Points,
     a: &mut Vec<f64>,
 ) -> Option<f64> {
-    let nd = prior.pts.len();
-    let nv = ctx.nv;
-    let ns = nd + obs.len();
-    let n = nv + ns;
-    let alone = dense::Layout::new(ns);
-    let joint = dense::Layout::new(n);
+    let (alone, joint) = s_side_layouts(ctx, prior, obs);
     let need = alone.len().max(joint.len());
     if a.len() < need {
         a.resize(need, 0.0);
     }
-    // ln det (K_SS + N_S): the observations alone.
-    fill_observations::<FMA>(ctx, prior, obs, rp, a, alone.ld, 0);
-    let ld_s = dense::factor(ctx.isa, a, alone, 0)?;
-    // ln det (K_SS + N_S - K_SV A^-1 K_VS): the joint `[V, D, obs]` with `A`'s factor as
-    // its leading block.
-    let ld = joint.ld;
-    let known = prior.known;
-    for v in 0..nv {
-        let row = &mut a[v * ld..(v + 1) * ld];
-        if v < known {
+    let ld_s = s_side_logdet::<FMA>(ctx, prior, obs, rp, a, alone, 0, false)?;
+    let ld_post = s_side_logdet::<FMA>(ctx, prior, obs, rp, a, joint, prior.known, true)?;
+    Some(ld_s - ld_post)
+}
+
+/// The layouts of the S-side form's two matrices: `K_SS + N_S` (`S = [D, obs]`) and the
+/// joint `[V, D, obs]`.
+fn s_side_layouts(
+    ctx: &Ctx,
+    prior: &Prior,
+    obs: &[(Point, f64)],
+) -> (dense::Layout, dense::Layout) {
+    let ns = prior.pts.len() + obs.len();
+    (dense::Layout::new(ns), dense::Layout::new(ctx.nv + ns))
+}
+
+/// Of the S-side form's two matrices in `a` (see [`s_side_layouts`]), whose rows and
+/// columns `..known` hold its factor already (a multiple of [`dense::KNOWN_STEP`]):
+/// * `joint == false`: `ln det (K_SS + N_S)`, `S = [D, obs]`;
+/// * `joint == true`: `ln det (K_SS + N_S - K_SV A^-1 K_VS)`, the Schur complement in the
+///   joint matrix `[V, D, obs]`, `known` from `prior.known` (the rows of `A`'s factor the
+///   prior keeps, copied in here) up to the whole matrix less its last rows (a walk's
+///   that shares its first observations with another's, [`near`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn s_side_logdet<const FMA: bool>(
+    ctx: &Ctx,
+    prior: &Prior,
+    obs: &[(Point, f64)],
+    rp: &Points,
+    a: &mut [f64],
+    layout: dense::Layout,
+    known: usize,
+    joint: bool,
+) -> Option<f64> {
+    let ld = layout.ld;
+    if joint && known == prior.known {
+        for v in 0..known {
             let u = v * prior.ua_ld;
-            row[v..known].copy_from_slice(&prior.ua[u + v..u + known]);
-            prior.a_row(v, known, &mut row[known..nv]);
+            a[v * ld + v..v * ld + known].copy_from_slice(&prior.ua[u + v..u + known]);
+        }
+    }
+    fill_raw::<FMA>(ctx, prior, obs, rp, a, ld, joint, known);
+    dense::factor_after(ctx.isa, a, layout, known, if joint { ctx.nv } else { 0 })
+}
+
+/// Writes the raw entries (upper triangle) of the matrix ordered `[V, D, obs]` (or `[D,
+/// obs]` without `with_v`) into `a` of row stride `ld`: of each row `i`, the columns
+/// from `known` (rows above `known`) or from `i` (the others) to the end, and zeros from
+/// there to `ld`. The block `..known` is left as it is (a factor already).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn fill_raw<const FMA: bool>(
+    ctx: &Ctx,
+    prior: &Prior,
+    obs: &[(Point, f64)],
+    rp: &Points,
+    a: &mut [f64],
+    ld: usize,
+    with_v: bool,
+    known: usize,
+) {
+    let nv = if with_v { ctx.nv } else { 0 };
+    let nd = prior.pts.len();
+    let o = nv + nd;
+    let n = o + obs.len();
+    for i in 0..n {
+        let from = i.max(known);
+        let row = &mut a[i * ld..(i + 1) * ld];
+        if i < nv {
+            if from < nv {
+                prior.a_row(i, from, &mut row[from..nv]);
+            }
+            for c in from.max(nv)..o {
+                row[c] = prior.dv[(c - nv) * ctx.nv + i];
+            }
+            let c0 = from.max(o);
+            ctx.kernel_row::<FMA>(ctx.vertices.at(i), rp, c0 - o, &mut row[c0..n]);
+        } else if i < o {
+            let d = i - nv;
+            for c in from..o {
+                row[c] = prior.dd[d * nd + c - nv];
+            }
+            let c0 = from.max(o);
+            ctx.kernel_row::<FMA>(prior.pts.at(d), rp, c0 - o, &mut row[c0..n]);
         } else {
-            prior.a_row(v, v, &mut row[v..nv]);
+            let r = i - o;
+            ctx.kernel_row::<FMA>(rp.at(r), rp, from - o, &mut row[from..n]);
+            if from == i {
+                row[i] += ctx.sn2 + obs[r].1;
+            }
         }
-        for (d, x) in row[nv..nv + nd].iter_mut().enumerate() {
-            *x = prior.dv[d * nv + v];
-        }
-        ctx.kernel_row::<FMA>(ctx.vertices.at(v), rp, 0, &mut row[nv + nd..n]);
         row[n..].fill(0.0);
     }
-    fill_observations::<FMA>(ctx, prior, obs, rp, a, ld, nv);
-    let ld_post = dense::factor_after(ctx.isa, a, joint, known, nv)?;
-    Some(ld_s - ld_post)
 }
 
 /// The V-side form of [`dense_gain`].
@@ -243,7 +281,7 @@ fn dense_gain_v_side<const FMA: bool>(
     if a.len() < layout.len() {
         a.resize(layout.len(), 0.0);
     }
-    fill_observations::<FMA>(ctx, prior, obs, rp, a, ld, 0);
+    fill_raw::<FMA>(ctx, prior, obs, rp, a, ld, false, 0);
     for i in 0..nd {
         let row = &mut a[i * ld..(i + 1) * ld];
         row[nd + nr..n].copy_from_slice(&prior.dv[i * nv..(i + 1) * nv]);
@@ -611,11 +649,16 @@ enum DispatchArg<'a> {
     LogDet(Option<(Point, f64)>, &'a mut Vec<f64>),
     /// Twice the utility of the prior plus these observations, by the dense path.
     Dense(&'a Prior, &'a [(Point, f64)]),
+    /// The same, keeping the factorisation as a base for walks near it ([`near`]).
+    NearBase(&'a Prior, &'a [(Point, f64)], usize),
+    /// The same, from a base's factorisation ([`near`]).
+    Near(&'a Prior, &'a [(Point, f64)], &'a near::BasePart),
 }
 
 enum DispatchOut {
     Added(bool),
     LogDet(Option<f64>),
+    Base(Option<near::BasePart>),
 }
 
 #[inline(always)]
@@ -626,6 +669,12 @@ fn run_op<const FMA: bool>(f: &mut Factor, ctx: &Ctx, a: DispatchArg<'_>) -> Dis
             DispatchOut::LogDet(logdet_sigma::<FMA>(f, ctx, extra, scratch))
         }
         DispatchArg::Dense(prior, obs) => DispatchOut::LogDet(dense_gain::<FMA>(ctx, prior, obs)),
+        DispatchArg::NearBase(prior, obs, max) => {
+            DispatchOut::Base(near::base_part::<FMA>(ctx, prior, obs, max))
+        }
+        DispatchArg::Near(prior, obs, base) => {
+            DispatchOut::LogDet(near::near_part::<FMA>(ctx, prior, obs, base))
+        }
     }
 }
 
@@ -951,27 +1000,15 @@ impl UtilityEngine {
     /// ([`merge_coincident`]): that is exact and shrinks the factorisation, whose cost
     /// grows with the cube of the number of observations.
     fn dense_utility(&self, obs: &[(Point, f64)]) -> Result<f64> {
-        let merged = merge_coincident(obs, self.kernel.sn2);
         // The dense path builds its own matrix; the dispatcher's factor goes unused.
         let mut unused = Factor::default();
         let mut gain = 0.0;
-        for part in &self.parts {
-            let on_floor: Vec<(Point, f64)>;
-            let obs = if self.parts.len() == 1 {
-                &merged
-            } else {
-                on_floor = merged
-                    .iter()
-                    .filter(|(p, _)| p.floor == part.floor)
-                    .copied()
-                    .collect();
-                &on_floor
-            };
+        for (part, obs) in self.parts.iter().zip(self.per_part(obs)) {
             match dispatch(
                 self.isa,
                 &mut unused,
                 &part.ctx,
-                DispatchArg::Dense(&part.prior, obs),
+                DispatchArg::Dense(&part.prior, &obs),
             ) {
                 DispatchOut::LogDet(Some(g)) => gain += g,
                 _ => {
@@ -982,6 +1019,25 @@ impl UtilityEngine {
             }
         }
         Ok((0.5 * gain).max(0.0))
+    }
+
+    /// `obs` merged where they coincide ([`merge_coincident`]) and split by floor, in the
+    /// order of [`Self::parts`].
+    fn per_part(&self, obs: &[(Point, f64)]) -> Vec<Vec<(Point, f64)>> {
+        let merged = merge_coincident(obs, self.kernel.sn2);
+        if self.parts.len() == 1 {
+            return vec![merged];
+        }
+        self.parts
+            .iter()
+            .map(|part| {
+                merged
+                    .iter()
+                    .filter(|(p, _)| p.floor == part.floor)
+                    .copied()
+                    .collect()
+            })
+            .collect()
     }
 
     /// `f_D` of many walks, in parallel.
@@ -1199,6 +1255,81 @@ pub(crate) mod tests {
         check_s_side(isa);
         check_large_v_side(isa);
         check_floors(isa);
+        check_near(isa);
+    }
+
+    /// Utilities from a base walk's factorisation ([`UtilityEngine::utility_near`]) agree
+    /// with whole evaluations: walks that leave the base at its start, middle or end, on
+    /// one floor or the other, that only add observations, the base itself, a walk that
+    /// takes the V side, for a robot and a person, on one and on two floors.
+    fn check_near(isa: Isa) {
+        let kernel = Kernel::new(62.58, 7.93, 4.22);
+        let k = 12;
+        for floors in [1, 2] {
+            let b = grid_floors(floors, k, 2.0);
+            let all: Vec<usize> = (0..b.len()).collect();
+            let up = k * k;
+            // Along row r of floor 0 from column `from` to column `to`.
+            let row = |r: usize, from: usize, to: usize| -> Vec<usize> {
+                if from <= to {
+                    (from..=to).map(|c| r * k + c).collect()
+                } else {
+                    (to..=from).rev().map(|c| r * k + c).collect()
+                }
+            };
+            let mut base = row(0, 0, 11);
+            base.extend(row(1, 11, 4));
+            let mut turn_early = row(0, 0, 3);
+            turn_early.extend(row(1, 3, 9));
+            let mut turn_late = row(0, 0, 11);
+            turn_late.extend(row(1, 11, 9));
+            turn_late.extend(row(2, 9, 2));
+            let mut longer = base.clone();
+            longer.extend(row(2, 4, 8));
+            let shorter = base[..base.len() - 3].to_vec();
+            let mut walks = vec![base.clone(), turn_early, turn_late, longer, shorter];
+            let mut long = Vec::new();
+            for r in 0..6 {
+                long.extend(if r % 2 == 0 {
+                    row(r, 0, 11)
+                } else {
+                    row(r, 11, 0)
+                });
+            }
+            walks.push(long);
+            let mut two_bases = vec![base.clone()];
+            if floors == 2 {
+                // Up the stairs at vertex 0 of each floor: the change on floor 1 only.
+                let mut b2: Vec<usize> = row(0, 4, 0);
+                b2.push(up);
+                b2.extend((1..8).map(|c| up + c));
+                let mut other = b2.clone();
+                other.truncate(other.len() - 3);
+                other.extend([up + k + 4, up + 2 * k + 4]);
+                two_bases.push(b2.clone());
+                walks.extend([b2, other]);
+            }
+            for model in [Surveyor::robot(), Surveyor::human()] {
+                let e =
+                    UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
+                for base in &two_bases {
+                    let nb = e.near_base(base).expect("base");
+                    let whole = e.utility(base).expect("utility");
+                    assert!(
+                        (nb.utility() - whole).abs() <= 1e-12 * whole,
+                        "{isa:?} base"
+                    );
+                    for w in &walks {
+                        let want = e.utility(w).expect("utility");
+                        let got = e.utility_near(&nb, w).expect("near");
+                        assert!(
+                            (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                            "{isa:?} {floors} floors {model:?}: {got} vs {want} for {w:?}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     /// `walk`'s utility by the dense path and grown vertex by vertex.
