@@ -42,7 +42,10 @@
 //!    ([`super::coverage::unpace`]), and the score loses 1% per reversal left. When one exact evaluation is cheap beside the search window (it affords at
 //!    least 40 batches in its last 80%; office-sized buildings and short walks), that last
 //!    part judges candidates by exact `f_D` instead, from the best walk known exactly:
-//!    the surrogate finds the basin, exact scores find the best walk in it. For a
+//!    the surrogate finds the basin, exact scores find the best walk in it. Each
+//!    candidate is scored from the factorisation of the walk it was drawn from
+//!    ([`crate::utility::UtilityEngine::utility_near`]): only the rows from its first
+//!    changed sample are computed. For a
 //!    person a quarter of that part's moves walk a closed sub-walk the other way
 //!    ([`closed_subwalk`]): the same edges and length, the samples elsewhere. When whole
 //!    batches of exact evaluations are too dear but one per batch is not, the last fifth
