@@ -32,7 +32,9 @@ fn main() -> trailprint::Result<()> {
             w
         })
         .collect();
-    let base = p.engine.near_base(&walk)?;
+    let base = p
+        .engine
+        .near_base(&walk, trailprint::utility::engine::NEAR_BASE_MAX)?;
     let (mut whole, mut near, mut worst) = (0.0, 0.0, 0.0f64);
     for w in &cands {
         let t = Instant::now();

@@ -238,6 +238,11 @@ fn plan_validated(
     }
     let engine =
         UtilityEngine::with_prior(building.clone(), req.kernel, req.settings.model, prior)?;
+    let headroom =
+        req.settings
+            .memory_budget
+            .saturating_sub(estimate_memory(&building, req, prior.len()))
+            / 8;
     let problem = Problem {
         building: building.clone(),
         engine,
@@ -247,6 +252,9 @@ fn plan_validated(
         budget: req.budget,
         near: Arc::default(),
         order: Arc::default(),
+        near_base_max: usize::try_from(headroom)
+            .unwrap_or(usize::MAX)
+            .min(crate::utility::engine::NEAR_BASE_MAX),
     };
     let solver = solver_for(
         req.settings.algorithm,

@@ -31,6 +31,12 @@ pub struct Problem {
     /// Each vertex's nearest edges in order, built per vertex on first use and shared by
     /// clones (see [`Problem::nearest_edges`]).
     pub order: Arc<OnceLock<EdgeOrder>>,
+    /// Most doubles the large-building search may keep of its walk's factorisation to
+    /// score walks near it ([`crate::utility::NearBase`]): the headroom the request's
+    /// memory budget leaves beyond its estimate, at most
+    /// [`crate::utility::engine::NEAR_BASE_MAX`] (so that it is not counted in the
+    /// estimate, and a request the budget just holds is not refused for it).
+    pub near_base_max: usize,
 }
 
 impl Problem {
@@ -54,6 +60,7 @@ impl Problem {
             budget,
             near: Arc::default(),
             order: Arc::default(),
+            near_base_max: crate::utility::engine::NEAR_BASE_MAX,
         })
     }
 

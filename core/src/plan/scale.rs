@@ -800,7 +800,7 @@ pub fn plan_large_with(
         }
         let exact_near = exact_phase && !screened && !near_off;
         if exact_near && near.as_ref().is_none_or(|b| b.walk() != walk.as_slice()) {
-            let b = p.engine.near_base(&walk)?;
+            let b = p.engine.near_base(&walk, p.near_base_max)?;
             stats.exact_evals += 1;
             near_off = !b.reuses();
             near = Some(b);
@@ -876,7 +876,7 @@ pub fn plan_large_with(
             // evaluation (the same to rounding), which is the next batch's base.
             let u = match u {
                 Some(_) if exact_near => {
-                    let b = p.engine.near_base(&w)?;
+                    let b = p.engine.near_base(&w, p.near_base_max)?;
                     stats.exact_evals += 1;
                     let x = b.utility();
                     near = Some(b);

@@ -1312,8 +1312,11 @@ pub(crate) mod tests {
             for model in [Surveyor::robot(), Surveyor::human()] {
                 let e =
                     UtilityEngine::build(b.clone(), kernel, model, &[], &all, isa).expect("engine");
-                for base in &two_bases {
-                    let nb = e.near_base(base).expect("base");
+                // With room for the factorisation, and with none (every floor whole).
+                let bases = two_bases.iter().flat_map(|b| [(b, NEAR_BASE_MAX), (b, 0)]);
+                for (base, max) in bases {
+                    let nb = e.near_base(base, max).expect("base");
+                    assert_eq!(nb.reuses(), max > 0, "{isa:?} {floors} floors {model:?}");
                     let whole = e.utility(base).expect("utility");
                     assert!(
                         (nb.utility() - whole).abs() <= 1e-12 * whole,

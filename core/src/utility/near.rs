@@ -67,10 +67,9 @@ impl NearBase {
     }
 }
 
-/// Most doubles a [`NearBase`] keeps (32 MiB), over all floors: a floor whose share
-/// (this divided by the floors) would be exceeded holds no factor, and every candidate's
-/// change there is evaluated whole (the building-sized floors, whose plans do not
-/// evaluate batches of candidates exactly).
+/// Most doubles a planner lets a [`NearBase`] keep (32 MiB), over all floors
+/// ([`UtilityEngine::near_base`]); the large-building search keeps less where the
+/// request's memory budget leaves less (`Problem::near_base_max`).
 pub const BASE_MAX: usize = DENSE_KEEP_MAX;
 
 /// Whether the dense path takes the S side for `ns` observations (with the prior's).
@@ -212,9 +211,11 @@ pub(super) fn near_part<const FMA: bool>(
 
 impl UtilityEngine {
     /// `walk` as a base for [`utility_near`](Self::utility_near): its exact utility
-    /// (the same as [`utility`](Self::utility) to rounding) and its factorisation, about
-    /// one dense matrix per floor (none on floors beyond 32 MiB of it).
-    pub fn near_base(&self, walk: &[usize]) -> Result<NearBase> {
+    /// (the same as [`utility`](Self::utility)) and its factorisation, about one dense
+    /// matrix per floor, at most `max` doubles in all (a floor whose share of `max`
+    /// cannot hold its matrices keeps none: a walk near the base is evaluated whole
+    /// there).
+    pub fn near_base(&self, walk: &[usize], max: usize) -> Result<NearBase> {
         let obs = self.walk_observations(walk)?;
         let mut parts = Vec::with_capacity(self.parts.len());
         let mut gain = 0.0;
@@ -224,7 +225,7 @@ impl UtilityEngine {
                 self.isa,
                 &mut unused,
                 &part.ctx,
-                DispatchArg::NearBase(&part.prior, &obs, BASE_MAX / self.parts.len()),
+                DispatchArg::NearBase(&part.prior, &obs, max / self.parts.len()),
             ) {
                 DispatchOut::Base(Some(b)) => {
                     gain += b.gain;
