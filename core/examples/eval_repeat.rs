@@ -5,24 +5,12 @@
 //! PLAN.json [POINTS]`.
 use std::time::Instant;
 
-use trailprint::plan::Problem;
-
 #[path = "common/cases.rs"]
 mod cases;
 
 fn main() -> trailprint::Result<()> {
     let a = cases::args_or_usage(4, "eval_repeat FILE robot|human PLAN.json [POINTS]")?;
-    let (b, kernel) = cases::load_with_kernel(&a[1])?;
-    let walk = cases::plan_walk(&b, &a[3])?;
-    let (start, end) = (walk[0], *walk.last().expect("walk"));
-    let p = Problem::new(
-        b.clone(),
-        kernel,
-        cases::model_named(&a[2]),
-        start,
-        end,
-        1e9,
-    )?;
+    let (p, walk) = cases::plan_problem(&a[1], &a[3], &a[2], 1e9)?;
     let points: usize = a.get(4).and_then(|x| x.parse().ok()).unwrap_or(40);
     let cands: Vec<Vec<usize>> = (1..=points)
         .map(|k| {

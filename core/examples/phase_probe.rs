@@ -10,7 +10,6 @@
 use std::time::Instant;
 
 use trailprint::Error;
-use trailprint::plan::Problem;
 use trailprint::plan::coverage::reversals;
 
 #[path = "common/cases.rs"]
@@ -18,20 +17,10 @@ mod cases;
 
 fn main() -> trailprint::Result<()> {
     let a = cases::args_or_usage(5, "phase_probe FILE BUDGET robot|human PLAN.json")?;
-    let (b, kernel) = cases::load_with_kernel(&a[1])?;
     let budget: f64 = a[2]
         .parse()
         .map_err(|_| Error::InvalidRequest(format!("budget: {}", a[2])))?;
-    let mut walk = cases::plan_walk(&b, &a[4])?;
-    let (start, end) = (walk[0], *walk.last().expect("walk"));
-    let p = Problem::new(
-        b.clone(),
-        kernel,
-        cases::model_named(&a[3]),
-        start,
-        end,
-        budget,
-    )?;
+    let (p, mut walk) = cases::plan_problem(&a[1], &a[4], &a[3], budget)?;
     let t0 = Instant::now();
     let mut u = p.utility(&walk)?;
     let rev0 = reversals(&p, &walk);

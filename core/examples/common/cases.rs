@@ -91,6 +91,22 @@ pub fn table_head(columns: &[&str]) {
     println!("|{}", "---|".repeat(columns.len()));
 }
 
+/// The building file `file` (its kernel as [`load_with_kernel`]), a saved plan's walk on
+/// it (`trailprint plan --json`) and the problem from that walk's start to its end with
+/// `budget`, for the surveyor named `model`.
+pub fn plan_problem(
+    file: &str,
+    plan: &str,
+    model: &str,
+    budget: f64,
+) -> trailprint::Result<(trailprint::plan::Problem, Vec<usize>)> {
+    let (b, kernel) = load_with_kernel(file)?;
+    let walk = plan_walk(&b, plan)?;
+    let (start, end) = (walk[0], *walk.last().expect("a walk has a vertex"));
+    let p = trailprint::plan::Problem::new(b, kernel, model_named(model), start, end, budget)?;
+    Ok((p, walk))
+}
+
 /// The walk of a saved plan (`trailprint plan --json`) as vertex indices of `b`.
 pub fn plan_walk(b: &Building, path: &str) -> trailprint::Result<Vec<usize>> {
     let text = std::fs::read_to_string(path)

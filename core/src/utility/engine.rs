@@ -167,9 +167,26 @@ fn dense_gain_s_side<const FMA: bool>(
     if a.len() < need {
         a.resize(need, 0.0);
     }
-    let ld_s = s_side_logdet::<FMA>(ctx, prior, obs, rp, a, alone, 0, false)?;
-    let ld_post = s_side_logdet::<FMA>(ctx, prior, obs, rp, a, joint, prior.known, true)?;
+    let e = Entries {
+        ctx,
+        prior,
+        obs,
+        rp,
+    };
+    let ld_s = s_side_logdet::<FMA>(e, a, alone, 0, false)?;
+    let ld_post = s_side_logdet::<FMA>(e, a, joint, prior.known, true)?;
     Some(ld_s - ld_post)
+}
+
+/// What the raw entries of one floor's dense matrices are made of: the floor's kernel
+/// and vertices, its prior observations and a walk's observations on it (with their
+/// positions packed for the kernel rows).
+#[derive(Clone, Copy)]
+struct Entries<'a> {
+    ctx: &'a Ctx,
+    prior: &'a Prior,
+    obs: &'a [(Point, f64)],
+    rp: &'a Points,
 }
 
 /// The layouts of the S-side form's two matrices: `K_SS + N_S` (`S = [D, obs]`) and the
@@ -190,18 +207,15 @@ fn s_side_layouts(
 ///   joint matrix `[V, D, obs]`, `known` from `prior.known` (the rows of `A`'s factor the
 ///   prior keeps, copied in here) up to the whole matrix less its last rows (a walk's
 ///   that shares its first observations with another's, [`near`]).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn s_side_logdet<const FMA: bool>(
-    ctx: &Ctx,
-    prior: &Prior,
-    obs: &[(Point, f64)],
-    rp: &Points,
+    e: Entries<'_>,
     a: &mut [f64],
     layout: dense::Layout,
     known: usize,
     joint: bool,
 ) -> Option<f64> {
+    let Entries { ctx, prior, .. } = e;
     let ld = layout.ld;
     if joint && known == prior.known {
         for v in 0..known {
@@ -209,7 +223,7 @@ fn s_side_logdet<const FMA: bool>(
             a[v * ld + v..v * ld + known].copy_from_slice(&prior.ua[u + v..u + known]);
         }
     }
-    fill_raw::<FMA>(ctx, prior, obs, rp, a, ld, joint, known);
+    fill_raw::<FMA>(e, a, ld, joint, known);
     dense::factor_after(ctx.isa, a, layout, known, if joint { ctx.nv } else { 0 })
 }
 
@@ -217,18 +231,14 @@ fn s_side_logdet<const FMA: bool>(
 /// obs]` without `with_v`) into `a` of row stride `ld`: of each row `i`, the columns
 /// from `known` (rows above `known`) or from `i` (the others) to the end, and zeros from
 /// there to `ld`. The block `..known` is left as it is (a factor already).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn fill_raw<const FMA: bool>(
-    ctx: &Ctx,
-    prior: &Prior,
-    obs: &[(Point, f64)],
-    rp: &Points,
-    a: &mut [f64],
-    ld: usize,
-    with_v: bool,
-    known: usize,
-) {
+fn fill_raw<const FMA: bool>(e: Entries<'_>, a: &mut [f64], ld: usize, with_v: bool, known: usize) {
+    let Entries {
+        ctx,
+        prior,
+        obs,
+        rp,
+    } = e;
     let nv = if with_v { ctx.nv } else { 0 };
     let nd = prior.pts.len();
     let o = nv + nd;
@@ -281,7 +291,13 @@ fn dense_gain_v_side<const FMA: bool>(
     if a.len() < layout.len() {
         a.resize(layout.len(), 0.0);
     }
-    fill_raw::<FMA>(ctx, prior, obs, rp, a, ld, false, 0);
+    let e = Entries {
+        ctx,
+        prior,
+        obs,
+        rp,
+    };
+    fill_raw::<FMA>(e, a, ld, false, 0);
     for i in 0..nd {
         let row = &mut a[i * ld..(i + 1) * ld];
         row[nd + nr..n].copy_from_slice(&prior.dv[i * nv..(i + 1) * nv]);

@@ -17,8 +17,8 @@
 //! them to 1e-12 relative).
 
 use super::{
-    Ctx, DENSE, DENSE_KEEP_MAX, DispatchArg, DispatchOut, Factor, Prior, UtilityEngine, dense,
-    dense_gain, dispatch, s_side_layouts, s_side_logdet,
+    Ctx, DENSE, DENSE_KEEP_MAX, DispatchArg, DispatchOut, Entries, Factor, Prior, UtilityEngine,
+    dense, dense_gain, dispatch, s_side_layouts, s_side_logdet,
 };
 use crate::gp::Point;
 use crate::utility::simd::Points;
@@ -108,12 +108,16 @@ pub(super) fn base_part<const FMA: bool>(
         });
     }
     let rp = points(obs);
+    let e = Entries {
+        ctx,
+        prior,
+        obs,
+        rp: &rp,
+    };
     let mut alone = vec![0.0; alone_layout.len()];
     let mut joint = vec![0.0; joint_layout.len()];
-    let ld_s = s_side_logdet::<FMA>(ctx, prior, obs, &rp, &mut alone, alone_layout, 0, false)?;
-    let known = prior.known;
-    let ld_post =
-        s_side_logdet::<FMA>(ctx, prior, obs, &rp, &mut joint, joint_layout, known, true)?;
+    let ld_s = s_side_logdet::<FMA>(e, &mut alone, alone_layout, 0, false)?;
+    let ld_post = s_side_logdet::<FMA>(e, &mut joint, joint_layout, prior.known, true)?;
     Some(BasePart {
         obs: obs.to_vec(),
         gain: ld_s - ld_post,
@@ -174,16 +178,13 @@ pub(super) fn near_part<const FMA: bool>(
         alone_layout.ld,
         known_alone,
     );
-    let ld_s = s_side_logdet::<FMA>(
+    let e = Entries {
         ctx,
         prior,
         obs,
-        &rp,
-        &mut a,
-        alone_layout,
-        known_alone,
-        false,
-    );
+        rp: &rp,
+    };
+    let ld_s = s_side_logdet::<FMA>(e, &mut a, alone_layout, known_alone, false);
     let ld_post = ld_s.and_then(|_| {
         copy_block(
             &base.joint,
@@ -192,16 +193,7 @@ pub(super) fn near_part<const FMA: bool>(
             joint_layout.ld,
             known_joint,
         );
-        s_side_logdet::<FMA>(
-            ctx,
-            prior,
-            obs,
-            &rp,
-            &mut a,
-            joint_layout,
-            known_joint,
-            true,
-        )
+        s_side_logdet::<FMA>(e, &mut a, joint_layout, known_joint, true)
     });
     if a.capacity() <= DENSE_KEEP_MAX {
         DENSE.set(a);
