@@ -185,7 +185,7 @@ impl ExactCost {
     }
 
     /// Seconds for an evaluation of `work` multiply-adds.
-    fn time(&self, work: f64) -> Duration {
+    pub(in crate::plan) fn time(&self, work: f64) -> Duration {
         Duration::from_secs_f64(self.fixed + self.per_work * work)
     }
 }
@@ -1294,7 +1294,7 @@ fn rebuild(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::coverage::tests::{lattice, problem};
     use super::*;
     use crate::plan::Control;
@@ -1492,13 +1492,21 @@ mod tests {
         std::sync::Arc::new(crate::building::Building::from_json(&text, "grid").expect("valid"))
     }
 
-    fn grid_problem(budget: f64) -> Problem {
+    pub(in crate::plan) fn grid_problem(budget: f64) -> Problem {
         let k = crate::gp::Kernel {
             sf2: 10.0,
             ell: 6.0,
             sn2: 0.5,
         };
         Problem::new(grid(), k, Surveyor::robot(), 0, 0, budget).expect("problem")
+    }
+
+    /// A cost model under which an evaluation of `work` multiply-adds takes `secs`.
+    pub(in crate::plan) fn cost_of(secs: f64, work: f64) -> ExactCost {
+        ExactCost {
+            fixed: 0.0,
+            per_work: secs / work,
+        }
     }
 
     #[test]
