@@ -15,8 +15,8 @@
 //! SPEC 3: the surrogate only ranks candidates inside the search.
 //!
 //! # The search ([`plan_large`])
-//! 1. **Constructions.** Spread coverage walks ([`super::coverage::leg`]) for a few
-//!    novelty radii and both tie rules ([`super::coverage::Leg::open_ties`]), each using
+//! 1. **Constructions.** Spread coverage walks ([`super::coverage::leg`]) for twelve
+//!    novelty radii ([`CONSTRUCTION_RADII`]) and both tie rules ([`super::coverage::Leg::open_ties`]), each using
 //!    the whole budget; the best by the surrogate is evaluated
 //!    exactly and offered at once, so a cancelled or timed-out plan returns a walk that
 //!    already uses the budget well.
@@ -80,6 +80,21 @@ use crate::{Error, Result};
 
 /// Candidates per batch of the large-neighbourhood search (evaluated in parallel).
 const BATCH: usize = 8;
+
+/// Novelty radii of the spread constructions, in units of the kernel's length scale
+/// (the moves of the search draw theirs from a coarser list: 0, 1/8, 1/4, 1/2 and 1).
+///
+/// A construction's utility is not smooth in its radius: on the generated mall, person
+/// 2,036 m, 216.2 nats at 0.04 against 198.5 at 0.125 and 177.6 at 0.16; robot 1,018 m
+/// 345.2 at 0.09 against 334.0 at 0.125 (`examples/construct_probe.rs`); the surrogate
+/// ranks them as `f_D` does. With these twelve instead of the moves' five (2 s, one core,
+/// seeds 1-4, mean utility against the five): the benchmark's 18 office, campus and mall
+/// rows and huge-3k person 3,116 m mean 1.004; mall person 509 m +2.7%, 2,036 m +2.3%,
+/// campus person 891 m +1.5%, mall robot 2,036 m +1.3%, huge-3k and mall person 1,018 m
+/// unchanged; lowest campus person 446 m -1.5%, mall robot 1,018 m -0.8%.
+const CONSTRUCTION_RADII: [f64; 12] = [
+    0.0, 0.04, 0.0625, 0.09, 0.11, 0.125, 0.14, 0.16, 0.19, 0.22, 0.25, 0.5,
+];
 
 /// Share of the search window (or of the batches, without a time limit) judged by exact
 /// `f_D` when exact evaluations are cheap enough (see [`EXACT_PHASE_BATCHES`]).
@@ -462,7 +477,7 @@ pub fn plan_large_with(
     let sur = Surrogate::new(p)?;
     let ell = p.engine.kernel().ell;
 
-    // 1. Constructions for a few novelty radii, each with both tie rules (lowest edge
+    // 1. Constructions for twelve novelty radii, each with both tie rules (lowest edge
     //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
     //    the surrogate.
     let radii: Vec<f64> = [0.0, 0.125, 0.25, 0.5, 1.0]
@@ -470,9 +485,10 @@ pub fn plan_large_with(
         .map(|f| f * ell)
         .collect();
     let base = whole_walk(p);
+    let build_radii: Vec<f64> = CONSTRUCTION_RADII.iter().map(|f| f * ell).collect();
     let variants: Vec<(f64, bool)> = [false, true]
         .iter()
-        .flat_map(|&o| radii.iter().map(move |&r| (r, o)))
+        .flat_map(|&o| build_radii.iter().map(move |&r| (r, o)))
         .collect();
     let built: Vec<(Vec<usize>, f64)> = variants
         .par_iter()
@@ -514,7 +530,7 @@ pub fn plan_large_with(
     // The best construction of the other tie rule is a finalist too, second: the
     // surrogate ranks the two rules' walks poorly against each other on big floors
     // (mall robot 2,036 m: it prefers a 432.8-nat walk to the open-ties one of 440.7).
-    let half = radii.len();
+    let half = build_radii.len();
     let best_of = |from: usize| {
         built[from..from + half]
             .iter()
