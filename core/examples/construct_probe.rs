@@ -3,7 +3,8 @@
 //! ranks the constructions as `f_D` does.
 //!
 //! `cargo run --release -p trailprint-core --example construct_probe -- FILE START END
-//! BUDGET robot|human`
+//! BUDGET robot|human [RADII]` (RADII in units of the kernel's length scale, e.g.
+//! `0,0.125,0.25`)
 use trailprint::Error;
 use trailprint::plan::coverage::{Leg, leg, unpace};
 use trailprint::plan::{Control, Problem, Run};
@@ -25,10 +26,21 @@ fn main() -> trailprint::Result<()> {
     let run = Run::new(Control::new(), None);
     let sur = trailprint::plan::scale::Surrogate::new(&p)?;
     println!("ell {:.2}", kernel.ell);
+    // The radii (in units of ell) from the sixth argument, comma-separated, else a grid.
+    let radii: Vec<f64> = a
+        .get(6)
+        .map_or(
+            "0,0.04,0.0625,0.09,0.11,0.125,0.14,0.16,0.19,0.22,0.25,0.5",
+            |s| s,
+        )
+        .split(',')
+        .map(|x| {
+            x.parse()
+                .map_err(|_| Error::InvalidRequest(format!("radius: {x}")))
+        })
+        .collect::<trailprint::Result<_>>()?;
     for open_ties in [false, true] {
-        for f in [
-            0.0, 0.04, 0.0625, 0.09, 0.11, 0.125, 0.14, 0.16, 0.19, 0.22, 0.25, 0.5,
-        ] {
+        for &f in &radii {
             let spec = Leg {
                 from: start,
                 prev: None,
