@@ -557,7 +557,7 @@ pub(in crate::plan) fn leg_marked(
         // The same edge as the scan below would find (same order of ties: by distance,
         // then by index), or, when the list runs out first, the scan itself.
         let mut settled = false;
-        if !(first && rng.is_some()) && !full_scan_only() {
+        if !(first && rng.is_some() || full_scan_only()) {
             let floor = usize::from(marks.free == 0);
             for &e in p.nearest_edges(cur) {
                 let e = e as usize;

@@ -250,15 +250,16 @@ fn fill_raw<const FMA: bool>(e: Entries<'_>, a: &mut [f64], ld: usize, with_v: b
             if from < nv {
                 prior.a_row(i, from, &mut row[from..nv]);
             }
-            for c in from.max(nv)..o {
-                row[c] = prior.dv[(c - nv) * ctx.nv + i];
+            let lo = from.max(nv).min(o);
+            for (c, x) in (lo..o).zip(&mut row[lo..o]) {
+                *x = prior.dv[(c - nv) * ctx.nv + i];
             }
             let c0 = from.max(o);
             ctx.kernel_row::<FMA>(ctx.vertices.at(i), rp, c0 - o, &mut row[c0..n]);
         } else if i < o {
             let d = i - nv;
-            for c in from..o {
-                row[c] = prior.dd[d * nd + c - nv];
+            if from < o {
+                row[from..o].copy_from_slice(&prior.dd[d * nd + from - nv..d * nd + o - nv]);
             }
             let c0 = from.max(o);
             ctx.kernel_row::<FMA>(prior.pts.at(d), rp, c0 - o, &mut row[c0..n]);
