@@ -311,6 +311,76 @@ fn demo_prints_words_not_debug_text_and_its_next_steps_work() {
 }
 
 #[test]
+fn a_plan_without_an_end_returns_to_its_start() {
+    // Most surveys end where they began: `--end` defaults to `--start`, for `plan` and
+    // `simulate` alike, and the route says so.
+    let (_dir, db) = temp_db();
+    let out = run_ok(
+        &db,
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c03",
+            "--budget",
+            "40",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    let walk = v["walk"].as_array().expect("walk");
+    assert_eq!(walk.first().and_then(|x| x.as_str()), Some("f0-c03"), "{v}");
+    assert_eq!(walk.last().and_then(|x| x.as_str()), Some("f0-c03"), "{v}");
+    assert!(v["length_m"].as_f64().expect("length") > 30.0, "{v}");
+    let text = run_ok(
+        &db,
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c03",
+            "--budget",
+            "40",
+            "--time-limit",
+            "0.3",
+        ],
+    );
+    assert!(text.contains("route         f0-c03 -> f0-c03"), "{text}");
+    let sim = run_ok(
+        &db,
+        &[
+            "simulate",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c03",
+            "--budget",
+            "40",
+            "--surveyor",
+            "human",
+            "--time-limit",
+            "0.3",
+            "--json",
+        ],
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(sim.lines().last().expect("json")).expect("simulate json");
+    assert_eq!(s["status"], "finished", "{s}");
+    let id = s["plan_id"].as_i64().expect("plan_id").to_string();
+    let shown = run_ok(&db, &["plans", "show", &id, "--json"]);
+    let p: serde_json::Value = serde_json::from_str(shown.trim()).expect("plan json");
+    assert_eq!(
+        (p["start"].as_str(), p["end"].as_str()),
+        (Some("f0-c03"), Some("f0-c03")),
+        "{p}"
+    );
+}
+
+#[test]
 fn plan_is_printed_for_a_person() {
     let (_dir, db) = temp_db();
     let person = ["--model", "human", "--time-limit", "0.3"];

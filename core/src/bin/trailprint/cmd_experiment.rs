@@ -21,9 +21,9 @@ pub struct Args {
     /// Start vertex id.
     #[arg(long)]
     start: String,
-    /// End vertex id (may equal the start).
+    /// End vertex id [default: the start, a walk back to where it began].
     #[arg(long)]
-    end: String,
+    end: Option<String>,
     /// Budgets, metres, comma-separated (for example 30,35,40,45,50).
     #[arg(long, value_name = "B1,B2,...", value_delimiter = ',', required = true)]
     budgets: Vec<f64>,
@@ -118,7 +118,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     };
     let mut config = ExperimentConfig::new(
         &a.start,
-        &a.end,
+        a.end.as_deref().unwrap_or(&a.start),
         a.budgets.clone(),
         a.algorithms.clone(),
         a.runs,

@@ -100,7 +100,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         a.kernel.resolve(&b).and_then(|(kernel, source)| {
             let req = PlanRequest::with_settings(
                 &route.start,
-                &route.end,
+                route.end(),
                 route.budget,
                 kernel,
                 &settings,
@@ -114,7 +114,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             let request = StorePlanRequest {
                 route: SurveyorTask {
                     start: route.start.clone(),
-                    end: route.end.clone(),
+                    end: route.end().to_string(),
                     budget: route.budget,
                 },
                 settings,
@@ -153,7 +153,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         println!(
             "route         {} -> {}",
             crate::store_cli::printable(&route.start),
-            crate::store_cli::printable(&route.end)
+            crate::store_cli::printable(route.end())
         );
         println!(
             "kernel        sf2={:.4} ell={:.4} sn2={:.4} ({source})",

@@ -267,7 +267,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     let time_limit = crate::opts::time_limit(a.time_limit)?;
     let req = PlanRequest {
         start: a.route.start.clone(),
-        end: a.route.end.clone(),
+        end: a.route.end().to_string(),
         budget: a.route.budget,
         kernel,
         settings: PlanSettings {

@@ -187,11 +187,18 @@ pub struct RouteOpts {
     /// Start vertex id.
     #[arg(long)]
     pub start: String,
-    /// End vertex id (may equal the start).
+    /// End vertex id [default: the start, a walk back to where it began].
     #[arg(long)]
-    pub end: String,
+    pub end: Option<String>,
     /// Budget: the longest walk allowed, metres. (A negative value is read as a number,
     /// so that the planner can say that a budget must be positive.)
     #[arg(long, allow_negative_numbers = true)]
     pub budget: f64,
+}
+
+impl RouteOpts {
+    /// The end vertex: `--end`, else the start (most surveys end where they began).
+    pub fn end(&self) -> &str {
+        self.end.as_deref().unwrap_or(&self.start)
+    }
 }
