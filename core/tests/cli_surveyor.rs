@@ -315,58 +315,27 @@ fn a_plan_without_an_end_returns_to_its_start() {
     // Most surveys end where they began: `--end` defaults to `--start`, for `plan` and
     // `simulate` alike, and the route says so.
     let (_dir, db) = temp_db();
-    let out = run_ok(
-        &db,
-        &[
-            "plan",
-            "--building",
-            DEMO,
-            "--start",
-            "f0-c03",
-            "--budget",
-            "40",
-            "--time-limit",
-            "0.3",
-            "--json",
-        ],
-    );
-    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    let route = [
+        "--building",
+        DEMO,
+        "--start",
+        "f0-c03",
+        "--budget",
+        "40",
+        "--time-limit",
+        "0.3",
+    ];
+    let with =
+        |command: &str, extra: &[&str]| run_ok(&db, &[&[command][..], &route, extra].concat());
+    let v: serde_json::Value =
+        serde_json::from_str(with("plan", &["--json"]).trim()).expect("json");
     let walk = v["walk"].as_array().expect("walk");
     assert_eq!(walk.first().and_then(|x| x.as_str()), Some("f0-c03"), "{v}");
     assert_eq!(walk.last().and_then(|x| x.as_str()), Some("f0-c03"), "{v}");
     assert!(v["length_m"].as_f64().expect("length") > 30.0, "{v}");
-    let text = run_ok(
-        &db,
-        &[
-            "plan",
-            "--building",
-            DEMO,
-            "--start",
-            "f0-c03",
-            "--budget",
-            "40",
-            "--time-limit",
-            "0.3",
-        ],
-    );
+    let text = with("plan", &[]);
     assert!(text.contains("route         f0-c03 -> f0-c03"), "{text}");
-    let sim = run_ok(
-        &db,
-        &[
-            "simulate",
-            "--building",
-            DEMO,
-            "--start",
-            "f0-c03",
-            "--budget",
-            "40",
-            "--surveyor",
-            "human",
-            "--time-limit",
-            "0.3",
-            "--json",
-        ],
-    );
+    let sim = with("simulate", &["--surveyor", "human", "--json"]);
     let s: serde_json::Value =
         serde_json::from_str(sim.lines().last().expect("json")).expect("simulate json");
     assert_eq!(s["status"], "finished", "{s}");
