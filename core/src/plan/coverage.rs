@@ -162,6 +162,26 @@ impl NearEdges {
         self.cap
     }
 
+    /// How many pairs of two different edges the table holds with one's midpoint within
+    /// `radius` of the other (`None` beyond [`NearEdges::cap`]). [`Marks`] of two radii
+    /// with the same count mark the same edges as near a walked one, so the
+    /// constructions of the two build the same walk ([`distinct_radii`]).
+    pub fn pairs_within(&self, radius: f64) -> Option<usize> {
+        if radius.is_nan() || radius > self.cap {
+            return None;
+        }
+        let mut count = 0;
+        for e in 0..self.start.len() - 1 {
+            let r = self.start[e] as usize..self.start[e + 1] as usize;
+            let dist = &self.dist[r.clone()];
+            let within = dist.partition_point(|&d| d <= radius);
+            // The edge's own midpoint lies on it: not a pair.
+            let own = self.idx[r][..within].iter().any(|&k| k as usize == e);
+            count += within - usize::from(own);
+        }
+        Some(count)
+    }
+
     /// The edges within `radius` (at most [`NearEdges::cap`]) of edge `e`.
     fn within(&self, e: usize, radius: f64) -> impl Iterator<Item = usize> + '_ {
         let r = self.start[e] as usize..self.start[e + 1] as usize;
@@ -171,6 +191,37 @@ impl NearEdges {
             .take_while(move |&(_, &d)| d <= radius)
             .map(|(&k, _)| k as usize)
     }
+}
+
+/// The radii of `radii` (metres, in order) to build constructions for: all but those
+/// whose [`Marks`] mark the same edges as an earlier one's, whose constructions would be
+/// the same walks. A radius of 0 marks no other edge, so it is the same as any radius
+/// within which no two edges are; a radius the problem's table does not answer for is
+/// kept. On the generated 3,161-vertex floor (length scale 7.9 m, rooms on a grid of
+/// 1.5 to 3 m) five of the twelve construction radii of the large-building search (0 to
+/// 0.5 length scales) mark what a smaller one does.
+pub(in crate::plan) fn distinct_radii(p: &Problem, radii: &[f64]) -> Vec<f64> {
+    let table = p.near_edges();
+    let mut seen: Vec<usize> = Vec::new();
+    radii
+        .iter()
+        .copied()
+        .filter(|&r| {
+            let key = if r == 0.0 {
+                Some(0)
+            } else {
+                table.and_then(|t| t.pairs_within(r))
+            };
+            match key {
+                Some(k) if seen.contains(&k) => false,
+                Some(k) => {
+                    seen.push(k);
+                    true
+                }
+                None => true,
+            }
+        })
+        .collect()
 }
 
 /// Whether legs skip [`EdgeOrder`] and scan every edge: only for the test that compares
@@ -953,6 +1004,65 @@ pub(super) mod tests {
         assert_eq!(reversals(&p, &walk), 2);
         let w = unpace(&p, &walk);
         assert_eq!(w, vec![0, 1, 5, 4, 0]);
+    }
+
+    #[test]
+    fn radii_that_mark_the_same_edges_build_the_same_walks() {
+        // Uneven spacings: many different distances between an edge and a midpoint.
+        let b = lattice_at([0.0, 2.1, 4.3, 6.2], [0.0, 2.3, 4.9]);
+        let p = problem(&b, 30.0);
+        let t = p.near_edges().expect("a table for radii up to ell");
+        let mids: Vec<Point> = b.edges.iter().map(|e| midpoint(&b, e.a, e.b)).collect();
+        let radii: Vec<f64> = (0..=40).map(|k| 0.1 * f64::from(k)).collect();
+        // The count is the scan's: pairs of two edges, one's midpoint within the radius.
+        for &r in &radii {
+            let scan = (0..b.edges.len())
+                .flat_map(|e| (0..mids.len()).map(move |k| (e, k)))
+                .filter(|&(e, k)| {
+                    let (pa, pb) = (&b.vertices[b.edges[e].a].pos, &b.vertices[b.edges[e].b].pos);
+                    k != e && mids[k].segment_projection(pa, pb).1 <= r
+                })
+                .count();
+            assert_eq!(t.pairs_within(r), Some(scan), "radius {r}");
+        }
+        let kept = distinct_radii(&p, &radii);
+        assert_eq!(kept.first(), Some(&0.0), "radius 0 is always built");
+        assert!(
+            kept.len() > 3 && kept.len() < radii.len(),
+            "{} of {} kept",
+            kept.len(),
+            radii.len()
+        );
+        // A radius left out builds what the last radius kept before it builds, with
+        // either tie rule.
+        let run = Run::new(Control::new(), None);
+        let walk = |radius: f64, open_ties: bool| {
+            let spec = Leg {
+                from: 0,
+                prev: None,
+                to: 0,
+                budget: 30.0,
+                radius,
+                any_fit: true,
+                avoid_reversals: false,
+                open_ties,
+            };
+            leg(&p, &spec, &[], None, &run)
+        };
+        for &r in radii.iter().filter(|r| !kept.contains(r)) {
+            let last = *kept.iter().rfind(|&&k| k < r).expect("0 is kept");
+            for open_ties in [false, true] {
+                assert_eq!(
+                    walk(r, open_ties),
+                    walk(last, open_ties),
+                    "radius {r} as {last}"
+                );
+            }
+        }
+        // Beyond the table's cap nothing is known, so the radius is built.
+        assert_eq!(t.pairs_within(t.cap() * 1.5), None);
+        let beyond = [0.0, t.cap() * 1.5];
+        assert_eq!(distinct_radii(&p, &beyond), beyond.to_vec());
     }
 
     // The generator is a research module (feature `research`, off in the phone's build).

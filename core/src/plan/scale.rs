@@ -72,7 +72,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::coverage::{Leg, Marks, leg, leg_marked, reversals, unpace};
+use super::coverage::{Leg, Marks, distinct_radii, leg, leg_marked, reversals, unpace};
 pub use super::surrogate::{Frame, Surrogate};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::samples::Surveyor;
@@ -376,22 +376,12 @@ pub(in crate::plan) fn whole_walk(p: &Problem) -> Leg {
 pub fn best_construction(p: &Problem, run: &Run, radii_ell: &[f64]) -> Result<(Vec<usize>, f64)> {
     let ell = p.engine.kernel().ell;
     let base = whole_walk(p);
-    let built: Vec<(Vec<usize>, Result<f64>)> = radii_ell
+    let radii: Vec<f64> = radii_ell.iter().map(|r| r * ell).collect();
+    let radii = distinct_radii(p, &radii);
+    let built: Vec<(Vec<usize>, Result<f64>)> = radii
         .par_iter()
         .map(|&r| {
-            let w = for_surveyor(
-                p,
-                leg(
-                    p,
-                    &Leg {
-                        radius: r * ell,
-                        ..base
-                    },
-                    &[],
-                    None,
-                    run,
-                ),
-            );
+            let w = for_surveyor(p, leg(p, &Leg { radius: r, ..base }, &[], None, run));
             let u = p.utility(&w);
             (w, u)
         })
@@ -479,18 +469,20 @@ pub fn plan_large_with(
 
     // 1. Constructions for twelve novelty radii, each with both tie rules (lowest edge
     //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
-    //    the surrogate.
+    //    the surrogate; a radius that marks what a smaller one does would build the same
+    //    walks, and is left out.
     let radii: Vec<f64> = [0.0, 0.125, 0.25, 0.5, 1.0]
         .iter()
         .map(|f| f * ell)
         .collect();
     let base = whole_walk(p);
     let build_radii: Vec<f64> = CONSTRUCTION_RADII.iter().map(|f| f * ell).collect();
+    let build_radii = distinct_radii(p, &build_radii);
     let variants: Vec<(f64, bool)> = [false, true]
         .iter()
         .flat_map(|&o| build_radii.iter().map(move |&r| (r, o)))
         .collect();
-    let built: Vec<(Vec<usize>, f64)> = variants
+    let walks: Vec<Vec<usize>> = variants
         .par_iter()
         .map(|&(r, open_ties)| {
             let spec = Leg {
@@ -498,12 +490,28 @@ pub fn plan_large_with(
                 open_ties,
                 ..base
             };
-            let w = for_surveyor(p, leg(p, &spec, &[], None, run));
-            let s = score(p, &sur, &w).unwrap_or(f64::NEG_INFINITY);
+            for_surveyor(p, leg(p, &spec, &[], None, run))
+        })
+        .collect();
+    // Different marks may still build the same walk (huge-3k person 3,116 m: 9 distinct
+    // walks of 14): each is scored once.
+    let first_of: Vec<usize> = (0..walks.len())
+        .map(|i| walks[..i].iter().position(|w| *w == walks[i]).unwrap_or(i))
+        .collect();
+    let scores: Vec<Option<f64>> = walks
+        .par_iter()
+        .enumerate()
+        .map(|(i, w)| (first_of[i] == i).then(|| score(p, &sur, w).unwrap_or(f64::NEG_INFINITY)))
+        .collect();
+    stats.surrogate_evals += scores.iter().flatten().count();
+    let built: Vec<(Vec<usize>, f64)> = walks
+        .into_iter()
+        .zip(&first_of)
+        .map(|(w, &j)| {
+            let s = scores[j].unwrap_or(f64::NEG_INFINITY);
             (w, s)
         })
         .collect();
-    stats.surrogate_evals += built.len();
     let (mut cur, mut cur_s) =
         built
             .iter()
