@@ -75,12 +75,13 @@ impl Problem {
     }
 
     /// For each edge, the edges whose midpoints lie within the kernel's length scale of it
-    /// (what a spread construction of novelty radius up to `ell` marks as near), built on
-    /// first use; `None` when the table would be too big to keep (then a construction
-    /// scans every edge instead).
+    /// (what a spread construction of novelty radius up to `ell` marks as near), or within
+    /// a half, a quarter or an eighth of it where the whole would be too big to keep
+    /// ([`NearEdges::largest`]), built on first use; `None` when even that is too big
+    /// (then a construction scans every edge instead).
     pub fn near_edges(&self) -> Option<&NearEdges> {
         self.near
-            .get_or_init(|| NearEdges::new(&self.building, self.engine.kernel().ell))
+            .get_or_init(|| NearEdges::largest(&self.building, self.engine.kernel().ell))
             .as_ref()
     }
 
