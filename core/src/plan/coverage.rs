@@ -252,17 +252,17 @@ impl NearEdges {
 
 /// The radii of `radii` (metres, in order) to build constructions for: all but those
 /// whose [`Marks`] mark the same edges as an earlier one's, whose constructions would be
-/// the same walks. A radius of 0 marks no other edge, so it is the same as any radius
-/// within which no two edges are; a radius the problem's table does not answer for is
-/// kept. On the generated 3,161-vertex floor (length scale 7.9 m, rooms on a grid of
-/// 1.5 to 3 m) five of the twelve construction radii of the large-building search (0 to
-/// 0.5 length scales) mark what a smaller one does.
+/// the same walks, and those beyond the problem's near-edge table ([`tabled_radii`]).
+/// A radius of 0 marks no other edge, so it is the same as any radius within which no
+/// two edges are; where there is no table every radius is kept. On the generated
+/// 3,161-vertex floor (length scale 7.9 m, rooms on a grid of 1.5 to 3 m) five of the
+/// twelve construction radii of the large-building search (0 to 0.5 length scales) mark
+/// what a smaller one does.
 pub(in crate::plan) fn distinct_radii(p: &Problem, radii: &[f64]) -> Vec<f64> {
     let table = p.near_edges();
     let mut seen: Vec<usize> = Vec::new();
-    radii
-        .iter()
-        .copied()
+    tabled_radii(p, radii)
+        .into_iter()
         .filter(|&r| {
             let key = if r == 0.0 {
                 Some(0)
@@ -279,6 +279,22 @@ pub(in crate::plan) fn distinct_radii(p: &Problem, radii: &[f64]) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+/// The radii of `radii` that the problem's near-edge table answers for (0 always), or
+/// all of them where it has none. A radius beyond the table's cap costs a scan of every
+/// edge per walked edge: on a 3,282-vertex three-floor building whose table is kept for
+/// half the length scale only ([`NearEdges::largest`]), the search's moves of one length
+/// scale spent 40% of a 2 s plan in those scans.
+pub(in crate::plan) fn tabled_radii(p: &Problem, radii: &[f64]) -> Vec<f64> {
+    match p.near_edges() {
+        Some(t) => radii
+            .iter()
+            .copied()
+            .filter(|&r| r == 0.0 || r <= t.cap())
+            .collect(),
+        None => radii.to_vec(),
+    }
 }
 
 /// Whether legs skip [`EdgeOrder`] and scan every edge: only for the test that compares
@@ -1116,10 +1132,12 @@ pub(super) mod tests {
                 );
             }
         }
-        // Beyond the table's cap nothing is known, so the radius is built.
+        // Beyond the table's cap it counts nothing, and the radius is left out (its
+        // marks would scan every edge per walked edge).
         assert_eq!(t.pairs_within(t.cap() * 1.5), None);
-        let beyond = [0.0, t.cap() * 1.5];
-        assert_eq!(distinct_radii(&p, &beyond), beyond.to_vec());
+        let beyond = [0.0, t.cap(), t.cap() * 1.5];
+        assert_eq!(distinct_radii(&p, &beyond), vec![0.0, t.cap()]);
+        assert_eq!(tabled_radii(&p, &beyond), vec![0.0, t.cap()]);
     }
 
     // The generator is a research module (feature `research`, off in the phone's build).

@@ -72,7 +72,9 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use super::coverage::{Leg, Marks, distinct_radii, leg, leg_marked, reversals, unpace};
+use super::coverage::{
+    Leg, Marks, distinct_radii, leg, leg_marked, reversals, tabled_radii, unpace,
+};
 pub use super::surrogate::{Frame, Surrogate};
 use super::{Algorithm, Outcome, Problem, Run, Termination, better};
 use crate::samples::Surveyor;
@@ -471,10 +473,13 @@ pub fn plan_large_with(
     //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
     //    the surrogate; a radius that marks what a smaller one does would build the same
     //    walks, and is left out.
-    let radii: Vec<f64> = [0.0, 0.125, 0.25, 0.5, 1.0]
-        .iter()
-        .map(|f| f * ell)
-        .collect();
+    let radii = tabled_radii(
+        p,
+        &[0.0, 0.125, 0.25, 0.5, 1.0]
+            .iter()
+            .map(|f| f * ell)
+            .collect::<Vec<_>>(),
+    );
     let base = whole_walk(p);
     let build_radii: Vec<f64> = CONSTRUCTION_RADII.iter().map(|f| f * ell).collect();
     let build_radii = distinct_radii(p, &build_radii);
