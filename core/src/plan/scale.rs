@@ -469,10 +469,8 @@ pub fn plan_large_with(
     let sur = Surrogate::new(p)?;
     let ell = p.engine.kernel().ell;
 
-    // 1. Constructions for twelve novelty radii, each with both tie rules (lowest edge
-    //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
-    //    the surrogate; a radius that marks what a smaller one does would build the same
-    //    walks, and is left out.
+    // The moves' novelty radii: those the near-edge table answers for (a radius beyond
+    // it marks by scanning every edge, see `tabled_radii`).
     let radii = tabled_radii(
         p,
         &[0.0, 0.125, 0.25, 0.5, 1.0]
@@ -480,6 +478,10 @@ pub fn plan_large_with(
             .map(|f| f * ell)
             .collect::<Vec<_>>(),
     );
+    // 1. Constructions for twelve novelty radii, each with both tie rules (lowest edge
+    //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
+    //    the surrogate; a radius that marks what a smaller one does would build the same
+    //    walks, and is left out.
     let base = whole_walk(p);
     let build_radii: Vec<f64> = CONSTRUCTION_RADII.iter().map(|f| f * ell).collect();
     let build_radii = distinct_radii(p, &build_radii);
