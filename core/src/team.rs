@@ -35,21 +35,28 @@ pub struct SurveyorTask {
 }
 
 impl SurveyorTask {
-    /// Parses `START:END:BUDGET`.
+    /// Parses `START:END:BUDGET`, or `START:BUDGET` for a walk back to its start (as
+    /// `plan` without `--end`).
     pub fn parse(s: &str) -> Result<Self> {
-        let parts: Vec<&str> = s.split(':').collect();
+        let parts: Vec<&str> = s.split(':').map(str::trim).collect();
         let bad = || {
             Error::InvalidRequest(format!(
-                "surveyor {s:?}: expected START:END:BUDGET, for example b00:b00:120"
+                "surveyor {s:?}: expected START:END:BUDGET or START:BUDGET, for example \
+                 b00:b10:120 or b00:120"
             ))
         };
-        if parts.len() != 3 || parts[0].is_empty() || parts[1].is_empty() {
+        let (start, end, budget) = match parts[..] {
+            [start, end, budget] => (start, end, budget),
+            [start, budget] => (start, start, budget),
+            _ => return Err(bad()),
+        };
+        if start.is_empty() || end.is_empty() {
             return Err(bad());
         }
-        let budget: f64 = parts[2].trim().parse().map_err(|_| bad())?;
+        let budget: f64 = budget.parse().map_err(|_| bad())?;
         Ok(SurveyorTask {
-            start: parts[0].trim().to_string(),
-            end: parts[1].trim().to_string(),
+            start: start.to_string(),
+            end: end.to_string(),
             budget,
         })
     }
@@ -351,8 +358,19 @@ mod tests {
             (t.start.as_str(), t.end.as_str(), t.budget),
             ("b00", "b10", 120.0)
         );
-        let e = SurveyorTask::parse("b00:120").expect_err("bad").to_string();
-        assert!(e.contains("expected START:END:BUDGET"), "{e}");
+        // Without an end, the walk returns to its start.
+        let t = SurveyorTask::parse("b00:120").expect("ok");
+        assert_eq!(
+            (t.start.as_str(), t.end.as_str(), t.budget),
+            ("b00", "b00", 120.0)
+        );
+        for bad in ["b00", "b00:b10:x", ":120", "b00::120", "a:b:c:120"] {
+            let e = SurveyorTask::parse(bad).expect_err(bad).to_string();
+            assert!(
+                e.contains("expected START:END:BUDGET or START:BUDGET"),
+                "{bad}: {e}"
+            );
+        }
         let mut req = request(false);
         req.surveyors[1].start = "nope".into();
         let e = plan_team(area_two(), &req, &[], &Control::new())

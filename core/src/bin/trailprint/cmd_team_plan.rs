@@ -15,7 +15,8 @@ use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
 pub struct Args {
     #[command(flatten)]
     building: BuildingOpts,
-    /// One surveyor as START:END:BUDGET (repeat for each surveyor).
+    /// One surveyor as START:END:BUDGET, or START:BUDGET for a walk back to its start
+    /// (repeat for each surveyor).
     #[arg(long = "surveyor", required = true, value_parser = |s: &str| SurveyorTask::parse(s).map_err(|e| e.to_string()))]
     surveyors: Vec<SurveyorTask>,
     /// Plan each surveyor alone, ignoring the others.
