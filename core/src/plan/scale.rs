@@ -22,10 +22,12 @@
 //!    already uses the budget well.
 //! 2. **Large-neighbourhood search.** Destroy a random stretch of the current walk (5% to
 //!    35% of its vertices, at most [`STRETCH_MAX_VERTICES`]) and rebuild it with a randomised spread leg that counts the rest
-//!    of the walk as walked; half the moves first cut a closed excursion out of the walk
+//!    of the walk as walked, its novelty radius drawn from [`MOVE_RADII`] or
+//!    [`FINE_MOVE_RADII`]; half the moves first cut a closed excursion out of the walk
 //!    (a second visit to a room), so that its budget can be spent where the stretch is
 //!    rebuilt. Candidates are drawn with the seeded generator and evaluated in parallel
-//!    in batches; the best of a batch replaces the current walk when its surrogate value
+//!    in batches (a candidate scored before in the phase, or the walk itself, keeps its
+//!    score: [`Seen`]); the best of a batch replaces the current walk when its surrogate value
 //!    is higher, or when it is at most 2% below the best walk seen (record-to-record
 //!    travel, the 2% shrinking to nothing over the window; the best walk is kept apart).
 //!    Both halves of a move are incremental on the walk it is drawn from: its leg starts
@@ -84,7 +86,7 @@ use crate::{Error, Result};
 const BATCH: usize = 8;
 
 /// Novelty radii of the spread constructions, in units of the kernel's length scale
-/// (the moves of the search draw theirs from a coarser list: 0, 1/8, 1/4, 1/2 and 1).
+/// (the moves of the search draw theirs from [`MOVE_RADII`] and [`FINE_MOVE_RADII`]).
 ///
 /// A construction's utility is not smooth in its radius: on the generated mall, person
 /// 2,036 m, 216.2 nats at 0.04 against 198.5 at 0.125 and 177.6 at 0.16; robot 1,018 m
@@ -97,6 +99,26 @@ const BATCH: usize = 8;
 const CONSTRUCTION_RADII: [f64; 12] = [
     0.0, 0.04, 0.0625, 0.09, 0.11, 0.125, 0.14, 0.16, 0.19, 0.22, 0.25, 0.5,
 ];
+
+/// Novelty radii of the search's moves, in units of the kernel's length scale: half the
+/// moves draw one of these (and every kick, [`KICK_STALE`]), half one of
+/// [`FINE_MOVE_RADII`].
+const MOVE_RADII: [f64; 5] = [0.0, 0.125, 0.25, 0.5, 1.0];
+
+/// The other half of the moves' novelty radii: the constructions' radii between those of
+/// [`MOVE_RADII`] ([`CONSTRUCTION_RADII`]). A move's leg is random only in its first
+/// target and tie rule, so from one walk the moves of five radii build a few hundred
+/// distinct candidates (office robot 101 m: 762 of 20,000 moves), which a converged
+/// search soon has all scored ([`Seen`]); more radii make more distinct candidates.
+/// Measured at 2 s, one core, mean utility against the five radii alone (both with
+/// [`Seen`]): all thirteen drawn alike, `docs/benchmark-scale.md`'s 18 office, campus and
+/// mall rows and huge-3k person 3,116 m, +0.42% (seeds 1-4) and +0.42% (seeds 5-8): mall
+/// robot 1,018 m +1.7%, office robot 402 m +1.9%, mall person 509 m +1.2%, campus
+/// person 223 m +1.1%; lowest campus person 446 m -0.9%; 36 rows of sweep 59's
+/// buildings (seeds 1-2) +0.27%, but -1.3% to -2.0% on two of its 398-vertex floors.
+/// Half the moves on these and half on the five, against all thirteen alike: +0.16%
+/// over those 34 rows (seeds 1-2), the two floors' rows +0.2% to +1.9%.
+const FINE_MOVE_RADII: [f64; 8] = [0.04, 0.0625, 0.09, 0.11, 0.14, 0.16, 0.19, 0.22];
 
 /// Share of the search window (or of the batches, without a time limit) judged by exact
 /// `f_D` when exact evaluations are cheap enough (see [`EXACT_PHASE_BATCHES`]).
@@ -424,6 +446,9 @@ pub struct Stats {
     pub kicks: usize,
     /// Whether the finalists' exact evaluations were deferred ([`DEFER_SHARE`]).
     pub deferred: bool,
+    /// Candidates that were the walk they were drawn from, or a walk scored before in
+    /// the same phase, and took that score instead of an evaluation ([`Seen`]).
+    pub known: usize,
 }
 
 /// How the search of [`plan_large_with`] divides its work.
@@ -469,15 +494,13 @@ pub fn plan_large_with(
     let sur = Surrogate::new(p)?;
     let ell = p.engine.kernel().ell;
 
-    // The moves' novelty radii: those the near-edge table answers for (a radius beyond
-    // it marks by scanning every edge, see `tabled_radii`).
-    let radii = tabled_radii(
-        p,
-        &[0.0, 0.125, 0.25, 0.5, 1.0]
-            .iter()
-            .map(|f| f * ell)
-            .collect::<Vec<_>>(),
-    );
+    // The moves' novelty radii ([`MOVE_RADII`], [`FINE_MOVE_RADII`]): those the
+    // near-edge table answers for (a radius beyond it marks by scanning every edge, see
+    // `tabled_radii`). `radii` holds both lists; a walk's marks are kept per radius.
+    let scaled = |fs: &[f64]| -> Vec<f64> { fs.iter().map(|f| f * ell).collect() };
+    let coarse = tabled_radii(p, &scaled(&MOVE_RADII));
+    let fine = tabled_radii(p, &scaled(&FINE_MOVE_RADII));
+    let radii: Vec<f64> = coarse.iter().chain(&fine).copied().collect();
     // 1. Constructions for twelve novelty radii, each with both tie rules (lowest edge
     //    index, and the edge the walk can carry on from: see `Leg::open_ties`), judged by
     //    the surrogate; a radius that marks what a smaller one does would build the same
@@ -722,6 +745,7 @@ pub fn plan_large_with(
     let mut near: Option<crate::utility::NearBase> = None;
     // Off once a base keeps nothing to start from (see `NearBase::reuses`).
     let mut near_off = false;
+    let mut seen = Seen::default();
     let search_start = Instant::now();
     while stats.batches < max_batches && !run.should_stop() {
         if stop_at.is_some_and(|t| Instant::now() >= t) {
@@ -737,6 +761,10 @@ pub fn plan_large_with(
             // Switch to exact scores: start from the best walk known exactly (the
             // search's walk, an offered one or a fixed finalist), judged as at the end.
             exact_phase = true;
+            // The scores kept so far are the surrogate's (unscreened, exact ones follow).
+            if !screened {
+                seen.clear();
+            }
             stats.exact_from_batch = Some(stats.batches);
             let u = p.utility(&cur)?;
             p.offer(run, &cur, u);
@@ -787,7 +815,12 @@ pub fn plan_large_with(
                 let i = rng.random_range(0..n.max(1));
                 let span = ((n as f64 * frac).ceil() as usize).max(1);
                 let j = (i + span).min(n - 1);
-                let radius = radii[rng.random_range(0..radii.len())];
+                // Half the moves take a coarse radius, half a fine one.
+                let radius = if fine.is_empty() || rng.random_bool(0.5) {
+                    coarse[rng.random_range(0..coarse.len())]
+                } else {
+                    fine[rng.random_range(0..fine.len())]
+                };
                 Move {
                     cut,
                     i,
@@ -839,17 +872,34 @@ pub fn plan_large_with(
         let exact_near = exact_near && !near_off;
         let nb = near.as_ref().filter(|_| exact_near);
         let fr = frame.as_ref();
-        // (walk, score, exact utility when the score is exact)
-        let cands: Vec<(Vec<usize>, f64, Option<f64>)> = moves
+        // (walk, score, exact utility when the score is exact, whether the score was
+        // known): a candidate that is the walk itself, or one scored before in this
+        // phase, takes its known score instead of another evaluation (see `Seen`).
+        let seen_now = &seen;
+        let walk_ref = &walk;
+        // The walk's own score as this batch judges: its surrogate value where the batch
+        // is ranked by the surrogate (in the screened phase `walk_s` is exact), else
+        // `walk_s`.
+        let walk_score = match fr {
+            Some(f) if by_surrogate => penalised(p, &walk, f.value()),
+            _ => walk_s,
+        };
+        let cands: Vec<(Vec<usize>, f64, Option<f64>, bool)> = moves
             .par_iter()
             .filter_map(|m| {
                 let k = radii.iter().position(|&r| r == m.radius);
                 let mk = k.and_then(|k| marks[k].as_ref());
-                let w = m.apply_marked(p, &walk, mk, human, run);
-                match fr {
+                let w = m.apply_marked(p, walk_ref, mk, human, run);
+                if w == *walk_ref {
+                    return Some((w, walk_score, None, true));
+                }
+                if let Some((sc, u)) = seen_now.get(&w) {
+                    return Some((w, sc, u, true));
+                }
+                let (w, sc, u) = match fr {
                     Some(f) if by_surrogate => {
                         let sc = penalised(p, &w, sur.value_near(f, &w).ok()?);
-                        Some((w, sc, None))
+                        (w, sc, None)
                     }
                     _ => {
                         let u = match nb {
@@ -857,16 +907,25 @@ pub fn plan_large_with(
                             None => p.utility(&w).ok()?,
                         };
                         let sc = penalised(p, &w, u);
-                        Some((w, sc, Some(u)))
+                        (w, sc, Some(u))
                     }
-                }
+                };
+                Some((w, sc, u, false))
             })
             .collect();
+        let fresh = cands.iter().filter(|c| !c.3).count();
+        stats.known += cands.len() - fresh;
         if exact_phase {
-            stats.exact_evals += cands.len();
+            stats.exact_evals += fresh;
         } else {
-            stats.surrogate_evals += cands.len();
+            stats.surrogate_evals += fresh;
         }
+        for (w, sc, u, known) in &cands {
+            if !known {
+                seen.insert(w, *sc, *u);
+            }
+        }
+        let cands = cands.into_iter().map(|(w, sc, u, _)| (w, sc, u));
         let mut best =
             cands
                 .into_iter()
@@ -960,7 +1019,7 @@ pub fn plan_large_with(
                     None => max_batches.min(400) as f64,
                 };
                 if affords >= KICK_BATCHES_PER_VERTEX * cur.len() as f64 {
-                    let m = kick(cur.len(), &radii, &mut rng);
+                    let m = kick(cur.len(), &coarse, &mut rng);
                     let w = m.apply(p, &cur, human, run);
                     let s = if exact_phase {
                         stats.exact_evals += 1;
@@ -1056,6 +1115,52 @@ pub fn plan_large_with(
     };
     report(1.0, "done".into());
     Ok((Outcome::new(walk, utility, term), stats))
+}
+
+/// The scores of the candidates a search phase has evaluated, by walk.
+///
+/// A move's rebuild is a spread leg that is random only in its first target and tie rule,
+/// so moves drawn from one walk often build the same candidate again, or the walk itself:
+/// at 2 s on one core, 57% of office robot 101 m's exact candidates were the walk they
+/// were drawn from and 79% had been evaluated before; campus person 223 m 20% and 47%;
+/// mall person 509 m 21% and 30%; mall robot 1,018 m (surrogate) 23% and 24%. Such a
+/// candidate takes the score it had (the walk's own for the walk itself) instead of an
+/// evaluation, so the search makes the same choices as if it had evaluated it, sooner.
+///
+/// Keyed by a 64-bit hash of the walk and its length; a candidate with a known score
+/// is never a new best walk (the best walk's score is at least every score of the
+/// phase), so a walk that is offered or returned always has a fresh exact evaluation.
+#[derive(Debug, Default)]
+struct Seen {
+    scores: std::collections::HashMap<(u64, usize), (f64, Option<f64>)>,
+}
+
+/// Most scores [`Seen`] keeps (about 40 bytes each) before it starts again.
+const SEEN_MAX: usize = 1 << 20;
+
+impl Seen {
+    fn key(walk: &[usize]) -> (u64, usize) {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        walk.hash(&mut h);
+        (h.finish(), walk.len())
+    }
+
+    /// The score and exact utility (if the score is exact) `walk` was given.
+    fn get(&self, walk: &[usize]) -> Option<(f64, Option<f64>)> {
+        self.scores.get(&Self::key(walk)).copied()
+    }
+
+    fn insert(&mut self, walk: &[usize], score: f64, utility: Option<f64>) {
+        if self.scores.len() >= SEEN_MAX {
+            self.scores.clear();
+        }
+        self.scores.insert(Self::key(walk), (score, utility));
+    }
+
+    fn clear(&mut self) {
+        self.scores.clear();
+    }
 }
 
 /// Most vertices of the walk that one move of the search rebuilds (the stretch is 5% to
@@ -1439,6 +1544,8 @@ pub(super) mod tests {
         let run = Run::new(Control::new(), Some(Duration::from_millis(1500)));
         let (out, stats) = plan_large(&p, &run, 5).expect("plan");
         assert!(stats.kicks > 0, "{stats:?}");
+        // Converged, most candidates are walks scored before: they keep their scores.
+        assert!(stats.known > stats.exact_evals, "{stats:?}");
         p.check(&out.walk).expect("feasible");
         let (_, best) = run.incumbent().expect("offered walks");
         assert!(
@@ -1447,6 +1554,22 @@ pub(super) mod tests {
             out.utility
         );
         assert!((p.utility(&out.walk).expect("utility") - out.utility).abs() < 1e-9);
+    }
+
+    #[test]
+    fn seen_keeps_one_score_per_walk_until_cleared() {
+        let mut seen = Seen::default();
+        let (a, b) = (vec![0, 1, 2, 1, 0], vec![0, 1, 2, 3, 0]);
+        seen.insert(&a, 3.5, Some(3.6));
+        seen.insert(&b, 2.0, None);
+        assert_eq!(seen.get(&a), Some((3.5, Some(3.6))));
+        assert_eq!(seen.get(&b), Some((2.0, None)));
+        assert_eq!(seen.get(&[0, 1, 2, 1]), None);
+        assert_eq!(seen.get(&[0, 3, 2, 1, 0]), None);
+        seen.insert(&a, 4.0, None);
+        assert_eq!(seen.get(&a), Some((4.0, None)));
+        seen.clear();
+        assert_eq!(seen.get(&a), None);
     }
 
     #[test]
