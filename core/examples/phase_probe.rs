@@ -9,7 +9,6 @@
 //! robot|human PLAN.json`
 use std::time::Instant;
 
-use trailprint::Error;
 use trailprint::plan::coverage::reversals;
 
 #[path = "common/cases.rs"]
@@ -17,9 +16,7 @@ mod cases;
 
 fn main() -> trailprint::Result<()> {
     let a = cases::args_or_usage(5, "phase_probe FILE BUDGET robot|human PLAN.json")?;
-    let budget: f64 = a[2]
-        .parse()
-        .map_err(|_| Error::InvalidRequest(format!("budget: {}", a[2])))?;
+    let budget = cases::number(&a, 2, "BUDGET")?;
     let (p, mut walk) = cases::plan_problem(&a[1], &a[4], &a[3], budget)?;
     let t0 = Instant::now();
     let mut u = p.utility(&walk)?;

@@ -33,6 +33,13 @@ pub fn args_or_usage(count: usize, usage: &str) -> trailprint::Result<Vec<String
     Ok(a)
 }
 
+/// Argument `i` of `args` as a number, else an error naming it as `what`.
+pub fn number(args: &[String], i: usize, what: &str) -> trailprint::Result<f64> {
+    args[i].parse().map_err(|_| {
+        trailprint::Error::InvalidRequest(format!("{what}: not a number: {}", args[i]))
+    })
+}
+
 /// A building file with its kernel: the file's own, else fitted on its pilot data.
 pub fn load_with_kernel(path: &str) -> trailprint::Result<(Arc<Building>, Kernel)> {
     let b = Arc::new(Building::load(Path::new(path))?);
