@@ -1127,9 +1127,13 @@ pub fn plan_large_with(
 /// candidate takes the score it had (the walk's own for the walk itself) instead of an
 /// evaluation, so the search makes the same choices as if it had evaluated it, sooner.
 ///
-/// Keyed by a 64-bit hash of the walk and its length; a candidate with a known score
-/// is never a new best walk (the best walk's score is at least every score of the
-/// phase), so a walk that is offered or returned always has a fresh exact evaluation.
+/// Keyed by a 64-bit hash of the walk and its length. A known score never makes a walk
+/// offered or returned without a fresh exact evaluation: in the exact phase the best
+/// walk's score is at least every score the phase has kept, so a known candidate is
+/// never a new best; in the surrogate and screened phases a walk is evaluated exactly
+/// before it is offered (the screened phase's best candidate of each batch, and the
+/// finalists), whatever its surrogate score. The cache is emptied when the exact phase
+/// starts.
 #[derive(Debug, Default)]
 struct Seen {
     scores: std::collections::HashMap<(u64, usize), (f64, Option<f64>)>,
