@@ -15,7 +15,7 @@ With `--small` the buildings are drawn small (1-2 floors, 2-8 rooms a side, corr
 20-40 m, rooms 6-10 m deep, grids of 2-4 m) and those of more than 100 vertices are
 skipped: the floors where `auto` runs its small-building portfolio.
 
-Prints one line per row and flags a row where auto is below 1.05x coverage, uses less than
+Prints one line per row (with a person's reversals per 100 m) and flags a row where auto is below 1.05x coverage, uses less than
 95% of the budget, or takes longer than 2.35 s (wall, process start-up included); a
 refusal for memory is printed as such. The last line counts the flagged rows.
 Needs the release binary (TRAILPRINT_BIN, else target/release/trailprint).
@@ -24,6 +24,18 @@ import json, math, os, queue, random, subprocess, sys, tempfile, threading, time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release", "trailprint")
+
+
+def reversals(path, walk):
+    """Reversals of `walk` (ids) on the building at `path`: walking straight back along
+    the edge just walked (`a, v, a`) where `v` is not a dead end, as `plan::coverage::reversals`
+    counts them."""
+    b = json.load(open(path))
+    degree = {}
+    for e in b["edges"]:
+        degree[e["a"]] = degree.get(e["a"], 0) + 1
+        degree[e["b"]] = degree.get(e["b"], 0) + 1
+    return sum(1 for a, v, c in zip(walk, walk[1:], walk[2:]) if a == c and degree[v] > 1)
 
 
 def main():
@@ -76,7 +88,8 @@ def main():
         if out.returncode != 0:
             return dict(error=out.stderr.strip()[:160], wall=wall)
         d = json.loads(out.stdout)
-        return dict(u=d["utility_nats"], length=d["length_m"], wall=wall)
+        return dict(u=d["utility_nats"], length=d["length_m"], wall=wall,
+                    reversals=reversals(path, d["walk"]))
 
     todo = queue.Queue()
     for j in jobs:
@@ -117,8 +130,10 @@ def main():
         if a["wall"] > 2.35:
             flags.append("slow")
         flagged += bool(flags)
+        # A person's walk: its reversals per 100 m (the robot may keep them where they pay).
+        revs = f" reversals/100 m {100 * a['reversals'] / max(a['length'], 1e-9):.1f}" if model == "human" else ""
         print(head, f"auto {a['u']:.2f} coverage {c['u']:.2f} ratio {ratio:.3f} "
-              f"length/budget {a['length'] / budget:.3f} wall {a['wall']:.2f} s", "; ".join(flags))
+              f"length/budget {a['length'] / budget:.3f} wall {a['wall']:.2f} s{revs}", "; ".join(flags))
     # Utility never decreases when only the budget grows (same building, ends and model).
     by_case = {}
     for j, a, _ in results:

@@ -37,6 +37,10 @@ pub struct LocalSearch {
     pub patience: usize,
     /// Stop after this many rounds in all.
     pub max_rounds: usize,
+    /// Rank walks by [`Problem::objective`] (a person's reversals cost a share of the
+    /// utility) instead of the utility alone: `auto`'s rule. The baselines that use
+    /// local search (branch and bound's first incumbent) rank by utility.
+    pub objective: bool,
 }
 
 impl LocalSearch {
@@ -46,7 +50,15 @@ impl LocalSearch {
             batch: 16,
             patience: 16,
             max_rounds: 10_000,
+            objective: false,
         }
+    }
+
+    /// The same search ranking walks by [`Problem::objective`] (see
+    /// [`objective`](Self::objective)).
+    pub fn by_objective(mut self) -> Self {
+        self.objective = true;
+        self
     }
 }
 
@@ -221,7 +233,8 @@ fn random_move_at(p: &Problem, w: &[usize], rng: &mut ChaCha8Rng, depth: usize) 
 
 impl LocalSearch {
     /// Improves `walk` (of utility `utility`) until no batch improves `patience` times in
-    /// a row, the round limit, or the deadline. Returns the best walk and its utility.
+    /// a row, the round limit, or the deadline. Returns the best walk and its utility
+    /// (best by [`Problem::objective`] when [`objective`](Self::objective) is set).
     pub fn improve(
         &self,
         p: &Problem,
@@ -243,7 +256,9 @@ impl LocalSearch {
     ) -> Result<(Vec<usize>, f64, usize)> {
         let mut evals = 0;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let score = |w: &[usize], u: f64| if self.objective { p.objective(w, u) } else { u };
         let (mut walk, mut utility) = (walk, utility);
+        let mut walk_score = score(&walk, utility);
         let mut pre = Prefixes::new(p, &walk)?;
         let mut idle = 0;
         for _ in 0..self.max_rounds {
@@ -279,17 +294,19 @@ impl LocalSearch {
                 })
                 .collect();
             run.check()?;
-            let mut best: Option<(usize, f64)> = None;
+            let mut best: Option<(usize, f64, f64)> = None;
             for (k, u) in us.into_iter().enumerate() {
                 let u = u?;
-                if u > utility + 1e-12 && best.is_none_or(|b| u > b.1) {
-                    best = Some((k, u));
+                let sc = score(&moves[k].walk, u);
+                if sc > walk_score + 1e-12 && best.is_none_or(|b| sc > b.2) {
+                    best = Some((k, u, sc));
                 }
             }
             match best {
-                Some((k, u)) => {
+                Some((k, u, sc)) => {
                     walk = std::mem::take(&mut moves[k].walk);
                     utility = u;
+                    walk_score = sc;
                     p.offer(run, &walk, utility);
                     pre = Prefixes::new(p, &walk)?;
                     idle = 0;
@@ -315,4 +332,80 @@ pub fn perturb(p: &Problem, walk: &[usize], strength: usize, rng: &mut ChaCha8Rn
         }
     }
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::coverage::reversals;
+    use super::super::coverage::tests::{lattice, problem};
+    use super::*;
+    use crate::plan::{Control, Problem};
+    use crate::surveyor::Surveyor;
+
+    /// The lattice problem of `coverage`'s tests for a person.
+    fn person(budget: f64) -> Problem {
+        let p = problem(&lattice(), budget);
+        Problem::new(
+            p.building.clone(),
+            *p.engine.kernel(),
+            Surveyor::human(),
+            0,
+            0,
+            budget,
+        )
+        .expect("problem")
+    }
+
+    #[test]
+    fn a_reversal_costs_a_person_one_percent_and_a_robot_nothing() {
+        let p = person(20.0);
+        // 0 -> 1 -> 0 turns back at vertex 1 (three neighbours): one reversal.
+        let walk = [0, 1, 0];
+        assert_eq!(reversals(&p, &walk), 1);
+        let u = p.utility(&walk).expect("utility");
+        assert!((p.objective(&walk, u) - 0.99 * u).abs() < 1e-12);
+        let robot = problem(&lattice(), 20.0);
+        assert_eq!(robot.objective(&walk, u), u);
+    }
+
+    #[test]
+    fn the_run_keeps_the_walk_with_the_best_objective_not_the_most_utility() {
+        let p = person(20.0);
+        let run = Run::new(Control::new(), None);
+        // A loop round the first square (no reversal), then a walk there and back along
+        // one edge (one reversal) credited with 0.5% more utility: a person is better off
+        // with the loop, so the run keeps it.
+        let looped = [0, 1, 5, 4, 0];
+        let paced = [0, 1, 0];
+        let u = p.utility(&looped).expect("utility");
+        p.offer(&run, &looped, u);
+        p.offer(&run, &paced, u * 1.005);
+        assert_eq!(run.incumbent().expect("offered").0, looped.to_vec());
+        // More than 1% more wins.
+        p.offer(&run, &paced, u * 1.02);
+        assert_eq!(run.incumbent().expect("offered").0, paced.to_vec());
+    }
+
+    #[test]
+    fn by_objective_the_search_never_ends_below_its_start() {
+        // A person's walk that paces: out and back along the first row.
+        let p = person(24.0);
+        let walk = vec![0, 1, 2, 3, 2, 1, 0];
+        let u = p.utility(&walk).expect("utility");
+        let run = Run::new(Control::new(), None);
+        for seed in 0..4 {
+            let (w, wu) = LocalSearch::new(seed)
+                .by_objective()
+                .improve(&p, &run, walk.clone(), u)
+                .expect("search");
+            assert!(p.check(&w).is_ok());
+            assert!(
+                p.objective(&w, wu) >= p.objective(&walk, u),
+                "seed {seed}: {} < {}",
+                p.objective(&w, wu),
+                p.objective(&walk, u)
+            );
+            assert!((p.utility(&w).expect("utility") - wu).abs() <= 1e-9 * wu.abs());
+        }
+    }
 }

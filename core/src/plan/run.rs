@@ -111,6 +111,8 @@ impl Control {
 pub(crate) struct Incumbent {
     pub(crate) walk: Vec<usize>,
     pub(crate) utility: f64,
+    /// What the walk is ranked by (see [`Problem::objective`](super::Problem::objective)).
+    pub(crate) score: f64,
 }
 
 /// The run state shared by a solver's threads: control, start time, deadline and the
@@ -157,21 +159,24 @@ impl Run {
         self
     }
 
-    /// Offers a feasible walk (start to end, within budget) with its exact utility; the
-    /// run keeps the best offered (ties: see [`better`]) and returns it if the plan is
-    /// cancelled or runs out of time before the solver returns.
-    pub fn offer(&self, walk: &[usize], utility: f64, length: f64) {
+    /// Offers a feasible walk (start to end, within budget) with its exact utility and
+    /// the score it is ranked by (its utility, less a share per reversal for a person:
+    /// [`Problem::objective`](super::Problem::objective)); the run keeps the best offered
+    /// by score (ties: see [`better`]) and returns it if the plan is cancelled or runs out
+    /// of time before the solver returns.
+    pub fn offer(&self, walk: &[usize], utility: f64, score: f64, length: f64) {
         let Ok(mut g) = self.best.lock() else {
             return;
         };
         let replace = match &*g {
             None => true,
-            Some(b) => better((walk, utility), (&b.walk, b.utility)),
+            Some(b) => better((walk, score), (&b.walk, b.score)),
         };
-        if replace && utility.is_finite() {
+        if replace && utility.is_finite() && score.is_finite() {
             *g = Some(Incumbent {
                 walk: walk.to_vec(),
                 utility,
+                score,
             });
             self.best_length.store(length.to_bits(), Ordering::Relaxed);
         }

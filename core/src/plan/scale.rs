@@ -351,20 +351,6 @@ fn refuse_if_too_slow(
     })
 }
 
-/// Share of a walk's value that one reversal costs, for a person: a walk that paces back
-/// and forth must be worth 1% more per reversal to be preferred.
-const REVERSAL_PENALTY: f64 = 0.01;
-
-/// `value` of `walk` less [`REVERSAL_PENALTY`] per reversal for a person (the robot is
-/// judged by value alone).
-fn penalised(p: &Problem, walk: &[usize], value: f64) -> f64 {
-    if matches!(p.engine.model(), Surveyor::Human { .. }) {
-        value * (1.0 - REVERSAL_PENALTY * reversals(p, walk) as f64).max(0.0)
-    } else {
-        value
-    }
-}
-
 /// A walk as a person gets it: reversals repaired ([`unpace`]) for the human model.
 fn for_surveyor(p: &Problem, walk: Vec<usize>) -> Vec<usize> {
     if matches!(p.engine.model(), Surveyor::Human { .. }) {
@@ -376,7 +362,7 @@ fn for_surveyor(p: &Problem, walk: Vec<usize>) -> Vec<usize> {
 
 /// The search score: the surrogate value, penalised per reversal for a person.
 fn score(p: &Problem, s: &Surrogate, walk: &[usize]) -> Result<f64> {
-    Ok(penalised(p, walk, s.value(walk)?))
+    Ok(p.objective(walk, s.value(walk)?))
 }
 
 /// The spread construction of a whole walk (start to end, the whole budget), nearest edge
@@ -414,7 +400,7 @@ pub fn best_construction(p: &Problem, run: &Run, radii_ell: &[f64]) -> Result<(V
     for (w, u) in built {
         let u = u?;
         p.offer(run, &w, u);
-        let s = penalised(p, &w, u);
+        let s = p.objective(&w, u);
         if best
             .as_ref()
             .is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs)))
@@ -768,10 +754,10 @@ pub fn plan_large_with(
             stats.exact_from_batch = Some(stats.batches);
             let u = p.utility(&cur)?;
             p.offer(run, &cur, u);
-            let mut start = (cur.clone(), u, penalised(p, &cur, u));
+            let mut start = (cur.clone(), u, p.objective(&cur, u));
             let known = fixed.iter().zip(&fixed_u).map(|(w, &u)| (w, u));
             for (w, u) in known.chain(offered.as_ref().map(|(w, u)| (w, *u))) {
-                let s = penalised(p, w, u);
+                let s = p.objective(w, u);
                 if better((w, s), (&start.0, start.2)) {
                     start = (w.clone(), u, s);
                 }
@@ -881,7 +867,7 @@ pub fn plan_large_with(
         // is ranked by the surrogate (in the screened phase `walk_s` is exact), else
         // `walk_s`.
         let walk_score = match fr {
-            Some(f) if by_surrogate => penalised(p, &walk, f.value()),
+            Some(f) if by_surrogate => p.objective(&walk, f.value()),
             _ => walk_s,
         };
         let cands: Vec<(Vec<usize>, f64, Option<f64>, bool)> = moves
@@ -898,7 +884,7 @@ pub fn plan_large_with(
                 }
                 let (w, sc, u) = match fr {
                     Some(f) if by_surrogate => {
-                        let sc = penalised(p, &w, sur.value_near(f, &w).ok()?);
+                        let sc = p.objective(&w, sur.value_near(f, &w).ok()?);
                         (w, sc, None)
                     }
                     _ => {
@@ -906,7 +892,7 @@ pub fn plan_large_with(
                             Some(b) => p.engine.utility_near(b, &w).ok()?,
                             None => p.utility(&w).ok()?,
                         };
-                        let sc = penalised(p, &w, u);
+                        let sc = p.objective(&w, u);
                         (w, sc, Some(u))
                     }
                 };
@@ -937,7 +923,7 @@ pub fn plan_large_with(
             let x = p.utility(w)?;
             stats.exact_evals += 1;
             *u = Some(x);
-            *sc = penalised(p, w, x);
+            *sc = p.objective(w, x);
         }
         let frac = match stop_at {
             Some(t) => {
@@ -956,7 +942,7 @@ pub fn plan_large_with(
         {
             let f = sur.frame(w)?;
             stats.surrogate_evals += 1;
-            *sc = penalised(p, w, f.value());
+            *sc = p.objective(w, f.value());
             next_frame = Some(f);
         }
         if let Some((w, s, u)) = best.clone()
@@ -1023,7 +1009,7 @@ pub fn plan_large_with(
                     let w = m.apply(p, &cur, human, run);
                     let s = if exact_phase {
                         stats.exact_evals += 1;
-                        penalised(p, &w, p.utility(&w)?)
+                        p.objective(&w, p.utility(&w)?)
                     } else {
                         stats.surrogate_evals += 1;
                         score(p, &sur, &w)?
@@ -1076,7 +1062,7 @@ pub fn plan_large_with(
                 let u = p.utility(&cur)?;
                 p.offer(run, &cur, u);
                 match known {
-                    Some((w, ku)) if penalised(p, &w, ku) > penalised(p, &cur, u) => (w, ku),
+                    Some((w, ku)) if p.objective(&w, ku) > p.objective(&cur, u) => (w, ku),
                     _ => (cur, u),
                 }
             }
@@ -1097,7 +1083,7 @@ pub fn plan_large_with(
     }
     let mut out: Option<(Vec<usize>, f64, f64)> = None; // walk, utility, penalised
     for (w, u) in finalists {
-        let s = penalised(p, &w, u);
+        let s = p.objective(&w, u);
         if out
             .as_ref()
             .is_none_or(|(bw, _, bs)| better((&w, s), (bw, *bs)))
