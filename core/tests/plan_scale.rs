@@ -459,6 +459,14 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
     );
 }
 
+/// Reversals per 100 m of the walk `r` planned for `req` on `b` with kernel `k`.
+fn reversals_per_100m(b: &Arc<Building>, k: Kernel, req: &PlanRequest, r: &PlanResult) -> f64 {
+    let w = &r.walk_indices;
+    let end = *w.last().expect("walk");
+    let p = Problem::new(b.clone(), k, req.settings.model, w[0], end, req.budget).expect("problem");
+    100.0 * reversals(&p, w) as f64 / r.length_m
+}
+
 #[test]
 fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let _serial = crate::serial();
@@ -467,16 +475,7 @@ fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let mut req = round_trip(&b, budget, k);
     req.settings.model = Surveyor::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-    let p = Problem::new(
-        b.clone(),
-        k,
-        req.settings.model,
-        r.walk_indices[0],
-        r.walk_indices[0],
-        budget,
-    )
-    .expect("problem");
-    let per_100m = 100.0 * reversals(&p, &r.walk_indices) as f64 / r.length_m;
+    let per_100m = reversals_per_100m(&b, k, &req, &r);
     // Measured: 0 to 0.5 per 100 m whatever the time the search gets (0.1 s to 4 s).
     assert!(per_100m <= 1.0, "{per_100m} reversals per 100 m");
 }
@@ -494,16 +493,7 @@ fn a_surveyors_walk_on_a_small_building_does_not_pace_either() {
         let mut req = PlanRequest::new("f0-c00", "f0-c15", budget, k);
         req.settings.model = Surveyor::human();
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-        let p = Problem::new(
-            b.clone(),
-            k,
-            req.settings.model,
-            r.walk_indices[0],
-            *r.walk_indices.last().expect("walk"),
-            budget,
-        )
-        .expect("problem");
-        let per_100m = 100.0 * reversals(&p, &r.walk_indices) as f64 / r.length_m;
+        let per_100m = reversals_per_100m(&b, k, &req, &r);
         // Measured: 3.4, 1.7 and 3.5 per 100 m.
         assert!(
             per_100m <= 6.0,

@@ -62,6 +62,19 @@ const SURVEYS: [(&str, &str, &str, &str); 2] = [
     ("area-two.json", "b00", "140", "greedy"),
 ];
 
+/// `simulate`'s options for a person who takes a wrong turn at 30% of the vertices, planned
+/// by `algo`.
+fn wrong_turns(algo: &str) -> [&str; 6] {
+    [
+        "--surveyor",
+        "human",
+        "--deviate",
+        "0.3",
+        "--algorithm",
+        algo,
+    ]
+}
+
 fn f(v: &serde_json::Value, key: &str) -> f64 {
     v[key].as_f64().unwrap_or_else(|| panic!("{key} in {v}"))
 }
@@ -73,14 +86,7 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
     let dir = tempfile::tempdir().expect("dir");
     let db = dir.path().join("b.db");
     let (building, start, budget, algo) = SURVEYS[1];
-    let human = [
-        "--surveyor",
-        "human",
-        "--deviate",
-        "0.3",
-        "--algorithm",
-        algo,
-    ];
+    let human = wrong_turns(algo);
     let v = simulate(&db, building, start, budget, &human);
     let b: f64 = budget.parse().expect("budget");
     assert_eq!(v["status"], "finished", "{v}");
@@ -110,14 +116,7 @@ fn thirty_percent_wrong_turns_keep_the_budget_on_average() {
     let db = dir.path().join("a.db");
     let (building, start, budget, algo) = SURVEYS[0];
     let b: f64 = budget.parse().expect("budget");
-    let human = [
-        "--surveyor",
-        "human",
-        "--deviate",
-        "0.3",
-        "--algorithm",
-        algo,
-    ];
+    let human = wrong_turns(algo);
     let mut no_reserve = human.to_vec();
     no_reserve.push("--no-reserve");
     let seeds = 1..=10;
