@@ -21,7 +21,7 @@ use super::{BUDGET_EPS, Metric, Run, Termination};
 /// person's plans (issue 13); the robot keeps reversals where they pay. On the small
 /// floors of `scripts/sweep_generated.py 61 12 --vary-radio --small` (21 person rows)
 /// 2% and 4% left 2.7 and 1.0 reversals per 100 m (1%: 5.4; judged by utility alone:
-/// 13.4) at 2.1% and 4.9% less utility than 1% does.
+/// 13.4) at 2.1% and 4.7% less utility than 1% does.
 pub const REVERSAL_PENALTY: f64 = 0.01;
 
 /// One planning instance: the building with its engine and metric closure, and the
