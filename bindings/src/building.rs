@@ -7,25 +7,36 @@ use crate::Result;
 /// A vertex of a building: a walkable point.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct VertexInfo {
+    /// Vertex id: what walks, check-ins and plan requests name it by.
     pub id: String,
+    /// Metres, in the building's own frame.
     pub x: f64,
+    /// Metres, in the building's own frame.
     pub y: f64,
+    /// Floor id (a `FloorInfo.id`).
     pub floor: i64,
+    /// A name to show for it (a room, a door), if the file gives one.
     pub label: Option<String>,
 }
 
 /// An undirected edge between two vertices (by id), with its walking length in metres.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct EdgeInfo {
+    /// Vertex id of one end.
     pub a: String,
+    /// Vertex id of the other end.
     pub b: String,
+    /// Walking length, m: as the file gives it, else the straight distance between the
+    /// ends (an edge between floors always has one in the file).
     pub length_m: f64,
 }
 
 /// A floor of a building.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct FloorInfo {
+    /// Floor id, as vertices and positions name it.
     pub id: i64,
+    /// A name to show for it, if the file gives one.
     pub name: Option<String>,
 }
 
@@ -59,9 +70,13 @@ impl From<KernelParams> for trailprint::gp::Kernel {
 /// A building's geometry, as the app draws it.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct BuildingMap {
+    /// The building's name.
     pub name: String,
+    /// Its floors in file order; one floor with id 0 when the file lists none.
     pub floors: Vec<FloorInfo>,
+    /// Its vertices in file order.
     pub vertices: Vec<VertexInfo>,
+    /// Its edges in file order.
     pub edges: Vec<EdgeInfo>,
     /// Number of pilot fingerprints.
     pub pilot_count: u32,

@@ -15,6 +15,7 @@ use crate::{Result, TrailprintError};
 pub enum SurveyorProfile {
     /// A robot labelled by SLAM: one scan every `interval_m` metres (paper: 0.5).
     Robot {
+        /// Metres between scans (default 0.5).
         interval_m: f64,
         /// Driving speed, m/s (time estimates; default 0.5).
         speed_mps: f64,
@@ -103,10 +104,11 @@ pub fn default_robot_profile() -> SurveyorProfile {
 /// A kernel fitted on pilot data.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct FitSummary {
+    /// The fitted kernel.
     pub kernel: KernelParams,
     /// Summed log marginal likelihood, nats.
     pub log_likelihood: f64,
-    /// Access points used by the fit.
+    /// Access points used by the fit, sorted by name.
     pub aps_used: Vec<String>,
     /// Number of pilot locations.
     pub locations: u32,

@@ -15,11 +15,20 @@ use crate::{Result, TrailprintError};
 /// The planning algorithms (`auto` is the recommended default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Enum)]
 pub enum PlanAlgorithm {
+    /// Greedy first, a genetic search seeded with its walk, local search, and an exact
+    /// search when the floor is small enough; stops at 2 s unless the request sets a
+    /// time limit.
     Auto,
+    /// The paper's Algorithm 1: ratio greedy over Steiner TSP paths.
     Greedy,
+    /// The paper's genetic algorithm (section IV-B).
     Genetic,
+    /// Chekuri and Pal's recursive greedy.
     RecursiveGreedy,
+    /// Edge-based random orienteering.
     Ero,
+    /// Branch and bound: the walk is proved optimal when it finishes within the time
+    /// limit (`termination` = `optimal`).
     Exact,
     /// The systematic walk (nearest unwalked edge first): the baseline.
     Coverage,
@@ -56,6 +65,7 @@ impl From<Algorithm> for PlanAlgorithm {
 /// What to plan: a walk of a stored building from `start` to `end` within `budget_m`.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct PlanRequest {
+    /// Store id of the building (`BuildingSummary.id`).
     pub building_id: i64,
     /// Start vertex id.
     pub start: String,
@@ -63,7 +73,10 @@ pub struct PlanRequest {
     pub end: String,
     /// Distance budget, metres (the app converts minutes with the walking speed).
     pub budget_m: f64,
+    /// Who walks: sets where the scans fall and how noisy their labels are, so the walk
+    /// is planned for it; saved with the plan.
     pub surveyor: SurveyorProfile,
+    /// The planner (`AUTO` unless comparing).
     pub algorithm: PlanAlgorithm,
     /// Seed of every random choice.
     pub seed: u64,
@@ -79,6 +92,7 @@ pub struct PlanRequest {
 /// A progress report of a running plan.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct PlanProgress {
+    /// The algorithm reporting: under `AUTO`, the phase running now.
     pub algorithm: PlanAlgorithm,
     /// Estimated fraction of the work done, 0 to 1.
     pub fraction: f64,

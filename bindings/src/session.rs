@@ -16,17 +16,20 @@ use crate::store::TrailprintStore;
 /// How a session judges and reacts to the surveyor leaving the plan.
 #[derive(Debug, Clone, Copy, uniffi::Record)]
 pub struct SessionOptions {
-    /// A human is off-route this many metres past a check-in that was due...
+    /// A human is off-route once the step count puts them this many metres past a
+    /// check-in that was due (default 3)...
     pub off_route_slack_m: f64,
-    /// ...plus this fraction of the leg to it.
+    /// ...plus this fraction of the leg to it (default 0.25).
     pub off_route_slack_fraction: f64,
-    /// A robot pose farther than this from the walk is off-route, metres.
+    /// A robot pose farther than this from the walk is off-route, metres (default 1.5).
     pub robot_tolerance_m: f64,
-    /// Replan automatically when the surveyor goes off-route.
+    /// Replan automatically when the surveyor goes off-route at a known vertex (default
+    /// true).
     pub auto_replan: bool,
-    /// Weight of the initial step length in its re-estimation, in steps.
+    /// Weight of the profile's step length in its re-estimation at check-ins, counted as
+    /// that many steps already measured (default 20).
     pub calibration_weight_steps: f64,
-    /// Seed of the replanner.
+    /// Seed of the replanner: replan k of the session uses seed + k (default 1).
     pub seed: u64,
 }
 
@@ -66,16 +69,23 @@ pub fn default_session_options() -> SessionOptions {
 /// One access point heard in a Wi-Fi scan.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct WifiReading {
+    /// The access point's BSSID (or any name that stays the same for it); not empty, and
+    /// at most once per scan.
     pub bssid: String,
     /// dBm, in [-120, 0].
     pub rss_dbm: f64,
 }
 
+/// Where a session stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Enum)]
 pub enum SessionStatus {
+    /// Accepting every event.
     Active,
+    /// After `pause`: only resume, finish or abort are accepted.
     Paused,
+    /// After `finish`: no more events are accepted.
     Finished,
+    /// After `abort`: no more events are accepted.
     Aborted,
 }
 
@@ -93,8 +103,11 @@ impl From<core::SessionStatus> for SessionStatus {
 /// A position estimate, metres on a floor.
 #[derive(Debug, Clone, Copy, uniffi::Record)]
 pub struct Position {
+    /// Metres, in the building's own frame (the frame of its vertices).
     pub x: f64,
+    /// Metres, in the building's own frame.
     pub y: f64,
+    /// Floor id (a `FloorInfo.id` of the building).
     pub floor: i64,
 }
 
@@ -111,16 +124,22 @@ impl From<core::Position> for Position {
 /// A fingerprint the session collected: a scan and the position it is labelled with.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct CollectedSample {
+    /// Seq of the scan event in the session's log.
     pub seq: i64,
+    /// Device time of the scan, ms since the Unix epoch.
     pub t_ms: i64,
+    /// The position the scan is labelled with: the session's estimate when it arrived.
     pub position: Position,
-    /// Distance walked since the last check-in (null for a robot), m.
+    /// Distance walked since the last check-in by the step count (steps times the
+    /// current step length), m; null for a robot.
     pub since_checkin_m: Option<f64>,
-    /// Standard deviation of the position label, m.
+    /// Standard deviation of the position label, m: the profile's step error times
+    /// `sinceCheckinM` (0 for a robot).
     pub sigma_m: f64,
-    /// Extra observation noise of the label, dB².
+    /// Extra observation noise the label's uncertainty adds to this sample in the
+    /// utilities and the coverage map, dB² (0 for a robot).
     pub extra_noise: f64,
-    /// dBm per access point.
+    /// RSS per BSSID, dBm, as the scan reported them.
     pub rss: HashMap<String, f64>,
 }
 
@@ -141,7 +160,9 @@ impl From<core::CollectedSample> for CollectedSample {
 /// The answer to an accepted event: it is on disk.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct EventAck {
+    /// Seq of this event in the session's log (1 for the first; a replan takes a seq too).
     pub seq: i64,
+    /// The session's status after the event.
     pub status: SessionStatus,
     /// The surveyor is off the planned walk after this event.
     pub off_route: bool,
@@ -151,7 +172,7 @@ pub struct EventAck {
     pub replan_seq: Option<i64>,
     /// Why an automatic replan failed (the event itself is recorded).
     pub replan_error: Option<String>,
-    /// The sample a scan produced.
+    /// The sample a scan produced (null for every other event).
     pub sample: Option<CollectedSample>,
     /// Position estimate after the event.
     pub position: Position,
@@ -175,11 +196,17 @@ impl From<core::Ack> for EventAck {
 /// What to do at the next waypoint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, uniffi::Enum)]
 pub enum Turn {
+    /// Keep going: the walk bends by at most 30 degrees there.
     Straight,
+    /// Turn left (by more than 30 and less than 150 degrees).
     Left,
+    /// Turn right (by more than 30 and less than 150 degrees).
     Right,
+    /// Turn round: 150 degrees or more.
     TurnBack,
+    /// Take the stairs or the lift to another floor.
     ChangeFloor,
+    /// The waypoint is the end of the walk.
     Arrive,
 }
 
@@ -199,11 +226,13 @@ impl From<core::Turn> for Turn {
 /// A vertex of the walk still ahead.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct Waypoint {
+    /// Vertex id.
     pub vertex: String,
+    /// The vertex's label in the building file, if it has one.
     pub label: Option<String>,
-    /// A check-in is expected there.
+    /// A check-in is expected there (always false for a robot).
     pub check_in: bool,
-    /// Distance along the walk, m.
+    /// Distance from the current position along the walk, m.
     pub distance_m: f64,
 }
 
@@ -221,16 +250,26 @@ impl From<core::Waypoint> for Waypoint {
 /// What the surveyor should do next.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct Guidance {
+    /// The session's status; only an active, on-route session gets a next vertex.
     pub status: SessionStatus,
+    /// The surveyor is off the planned walk (the message says how to get back).
     pub off_route: bool,
-    /// Next vertex of the walk (null at the end or once the session is over).
+    /// Next vertex of the walk (null at the end, off-route, paused, or once the session
+    /// is over).
     pub next_vertex: Option<String>,
+    /// Label of the next vertex in the building file, if it has one.
     pub next_label: Option<String>,
-    /// Distance to it along the walk, m.
+    /// Distance to it along the walk, m (0 when there is no next vertex).
     pub distance_m: f64,
+    /// What to do at the next vertex (`ARRIVE` there at the end, and when there is no
+    /// next vertex).
     pub turn: Turn,
+    /// Check in at the next vertex (always false for a robot).
     pub check_in_at_next: bool,
+    /// The first vertex from the next one on where a check-in is due (null for a robot
+    /// and when there is no next vertex).
     pub next_check_in: Option<String>,
+    /// Distance to `nextCheckIn` along the walk, m (0 when it is null).
     pub distance_to_check_in_m: f64,
     /// One sentence for the screen.
     pub message: String,
@@ -256,9 +295,13 @@ impl From<core::Guidance> for Guidance {
 /// Posterior uncertainty at a vertex (coverage map).
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct VertexUncertainty {
+    /// Vertex id.
     pub vertex: String,
+    /// The vertex's position, metres, in the building's own frame.
     pub x: f64,
+    /// Metres, in the building's own frame.
     pub y: f64,
+    /// Floor id of the vertex.
     pub floor: i64,
     /// Posterior standard deviation of the fingerprint, dB.
     pub std_db: f64,
@@ -267,22 +310,44 @@ pub struct VertexUncertainty {
 /// A snapshot of a session.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct SessionProgress {
+    /// The session's status.
     pub status: SessionStatus,
+    /// The surveyor is off the planned walk.
     pub off_route: bool,
-    /// Walked / (walked + remaining), 0 to 1.
+    /// Walked / (walked + remaining), 0 to 1 (1 when both are 0).
     pub fraction_done: f64,
+    /// Metres walked: for a human, the planned length of each leg ended by an on-route
+    /// check-in, and the step count for the rest; for a robot, the straight distances
+    /// between its successive poses.
     pub walked_m: f64,
+    /// The distance budget of the plan the session started with, m (replans keep it).
     pub budget_m: f64,
+    /// `budgetM - walkedM`, m; negative once the surveyor has walked more than the budget.
     pub budget_left_m: f64,
+    /// Metres of planned walk still ahead; off-route at a vertex, the shortest way from
+    /// there to the end.
     pub remaining_m: f64,
+    /// Active time from the first event to the last, pauses left out, s.
     pub elapsed_s: f64,
+    /// Estimated time to walk `remainingM`, s: at the speed observed so far once more
+    /// than 10 s and 5 m are behind, else at the surveyor profile's speed.
     pub remaining_s: f64,
+    /// Scans recorded so far (fingerprints collected).
     pub samples: u64,
+    /// Utility of the walk the session started with, valued for this session's surveyor
+    /// profile, nats.
     pub planned_utility_nats: f64,
+    /// Utility of the scans actually recorded, at their labelled positions and with
+    /// their label noise, nats: compare with `plannedUtilityNats`.
     pub collected_utility_nats: f64,
+    /// The current step-length estimate, m (re-estimated at on-route check-ins; 0 for a
+    /// robot).
     pub step_length_m: f64,
+    /// Replans applied so far, automatic or asked for with `replan()`.
     pub replans: u32,
+    /// How many times the surveyor went off the walk.
     pub off_route_events: u32,
+    /// The coverage map: one entry per vertex of the building, in the building's order.
     pub uncertainty: Vec<VertexUncertainty>,
 }
 
@@ -322,20 +387,36 @@ impl From<core::Progress> for SessionProgress {
 /// The end of a session.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct SessionSummary {
+    /// Store id of the session.
     pub session_id: i64,
+    /// The session's status (`FINISHED` once `finish` was recorded).
     pub status: SessionStatus,
+    /// Metres walked, as in `SessionProgress.walkedM`.
     pub walked_m: f64,
+    /// The plan's distance budget, m.
     pub budget_m: f64,
+    /// Active time, pauses left out, s.
     pub elapsed_s: f64,
+    /// Scans recorded (fingerprints collected).
     pub samples: u64,
+    /// Check-in events recorded.
     pub check_ins: u32,
+    /// Steps counted by all the step events (0 for a robot).
     pub steps: u64,
+    /// As in `SessionProgress.plannedUtilityNats`, nats.
     pub planned_utility_nats: f64,
+    /// As in `SessionProgress.collectedUtilityNats`, nats.
     pub collected_utility_nats: f64,
+    /// The final step-length estimate, m (0 for a robot).
     pub step_length_m: f64,
+    /// Replans applied, automatic or asked for.
     pub replans: u32,
+    /// How many times the surveyor went off the walk.
     pub off_route_events: u32,
+    /// Posterior standard deviation of the fingerprint averaged over the building's
+    /// vertices, dB: lower is a better-surveyed building.
     pub mean_std_db: f64,
+    /// The largest posterior standard deviation at any vertex, dB: the worst-covered spot.
     pub max_std_db: f64,
 }
 
@@ -364,18 +445,24 @@ impl From<core::Summary> for SessionSummary {
 /// The result of a replan.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct ReplanOutcome {
+    /// Seq of the replan event in the session's log.
     pub seq: i64,
     /// Store id of the new plan.
     pub plan_id: i64,
-    /// Where the new walk starts.
+    /// Where the new walk starts: the vertex the surveyor is at or walking to.
     pub from_vertex: String,
+    /// The new walk, vertex ids from `fromVertex` to the end.
     pub walk: Vec<String>,
+    /// Length of the new walk, m.
     pub length_m: f64,
+    /// Budget that was left for it: the plan's budget less the metres walked and the way
+    /// to `fromVertex`, m.
     pub budget_left_m: f64,
     /// The budget left cannot reach the end: the walk is the shortest way there.
     pub over_budget: bool,
     /// Metres of the budget left kept back for wrong turns still to come.
     pub reserve_m: f64,
+    /// Utility of the new walk given the pilot data and everything collected so far, nats.
     pub utility_nats: f64,
 }
 
@@ -398,12 +485,21 @@ impl From<core::ReplanOutcome> for ReplanOutcome {
 /// A stored session, as listed.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct SessionInfo {
+    /// Store id of the session (what `resumeSession` takes).
     pub id: i64,
+    /// Store id of its building.
     pub building_id: i64,
+    /// The plan it started from; null for a session stored without one (a bundle may
+    /// bring such sessions in).
     pub plan_id: Option<i64>,
+    /// When it was started, ms since the Unix epoch (for a session imported from a
+    /// bundle, when it was started on the other device).
     pub created_ms: i64,
+    /// Seq of its last logged event, 0 if it has none.
     pub last_seq: i64,
+    /// Read off its last pause, resume, finish or abort event (`ACTIVE` if none).
     pub status: SessionStatus,
+    /// Fingerprints collected in it.
     pub collected: u64,
 }
 

@@ -13,20 +13,32 @@ use crate::model::SurveyorProfile;
 /// A stored building's summary.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct BuildingSummary {
+    /// Store id: what every other call takes as `buildingId`.
     pub id: i64,
+    /// The name in its file; one building per name in a store.
     pub name: String,
     /// Where it was imported from (file name or origin).
     pub source: Option<String>,
+    /// When it was imported, ms since the Unix epoch.
     pub imported_ms: i64,
+    /// Number of floors (1 for a file that lists none).
     pub floors: u64,
+    /// Number of vertices of the walkable graph.
     pub vertices: u64,
+    /// Number of edges of the walkable graph.
     pub edges: u64,
+    /// Access points the store knows in it: heard in its pilot, test or dense-survey
+    /// fingerprints or in collected scans.
     pub access_points: u64,
+    /// Pilot fingerprints stored for it (what the kernel is fitted on).
     pub pilot: u64,
     /// Whether the building file gave a kernel (else it is fitted on the pilot data).
     pub has_kernel: bool,
+    /// Kernel fits recorded for it.
     pub fits: u64,
+    /// Saved plans, replans and team plans included.
     pub plans: u64,
+    /// Survey sessions, imported ones included.
     pub sessions: u64,
     /// Fingerprints collected in its sessions.
     pub collected: u64,
@@ -56,23 +68,40 @@ impl From<BuildingInfo> for BuildingSummary {
 /// A saved plan.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct PlanSummary {
+    /// Store id of the plan (what `startSession` takes).
     pub id: i64,
+    /// Store id of its building.
     pub building_id: i64,
+    /// Start vertex id.
     pub start: String,
+    /// End vertex id.
     pub end: String,
+    /// Where the walk came from: an algorithm's name (`auto`, `greedy`, `genetic`,
+    /// `recursive-greedy`, `ero`, `exact`, `coverage`), `session-greedy` for a session's
+    /// replan by its own greedy replanner, or `given` for a walk that was not planned.
     pub algorithm: String,
     /// Vertex ids from start to end.
     pub walk: Vec<String>,
+    /// Length of the walk, m.
     pub length_m: f64,
+    /// The distance budget it was planned within, m (for a replan, what was left less the
+    /// reserve it keeps).
     pub budget_m: f64,
+    /// Number of places along the walk where the surveyor scans.
     pub samples: u64,
+    /// What the walk's scans tell about the building's fingerprints (mutual information),
+    /// nats; higher is better. A replan's is given what was collected before it.
     pub utility_nats: f64,
+    /// How long the planner ran, ms.
     pub elapsed_ms: u64,
+    /// The planner's seed; null for a walk that was not planned.
     pub seed: Option<u64>,
+    /// The kernel the utility was computed with.
     pub kernel: KernelParams,
     /// The surveyor the plan was made for (null for a walk handed to a session rather
     /// than planned).
     pub surveyor: Option<SurveyorProfile>,
+    /// When it was planned, ms since the Unix epoch.
     pub created_ms: i64,
     /// Why the planner stopped (`completed`, `optimal`, `time_limit`, `cancelled`), for
     /// the plan a `PlanJob.run` just made; null for plans read back from the store.

@@ -12,19 +12,29 @@ use crate::{Result, TrailprintError};
 /// One member of a team: where they start and end, and how far they may walk.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct TeamMember {
+    /// Start vertex id.
     pub start: String,
+    /// End vertex id (may equal the start).
     pub end: String,
+    /// This member's distance budget, m.
     pub budget_m: f64,
 }
 
 /// A team planning request on a stored building.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct TeamPlanRequest {
+    /// Store id of the building.
     pub building_id: i64,
+    /// The members, in the order the summary lists their plans.
     pub members: Vec<TeamMember>,
+    /// One surveyor profile for every member.
     pub surveyor: crate::model::SurveyorProfile,
+    /// The planner of each member's walk.
     pub algorithm: PlanAlgorithm,
+    /// Seed of the first member; member i plans with seed + i.
     pub seed: u64,
+    /// Time limit of each single-walk planning call, of which a team plan makes several
+    /// per member, s (null: the algorithm's default, 2 s for `AUTO`).
     pub time_limit_s: Option<f64>,
     /// Plan each member alone (for comparison) instead of as a team.
     pub independent: bool,
@@ -34,7 +44,9 @@ pub struct TeamPlanRequest {
 /// session from their own plan id.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct TeamPlanSummary {
+    /// Store ids of the saved plans, one per member, in order.
     pub plan_ids: Vec<i64>,
+    /// Each member's walk, vertex ids from start to end.
     pub walks: Vec<Vec<String>>,
     /// Each walk's utility on its own, nats.
     pub utilities_nats: Vec<f64>,
@@ -45,12 +57,19 @@ pub struct TeamPlanSummary {
 /// What importing a bundle did.
 #[derive(Debug, Clone, uniffi::Record)]
 pub struct BundleImportSummary {
+    /// The bundle's checksum (SHA-256 of its content), which identifies it.
     pub bundle_id: String,
+    /// Name of the building its sessions belong to.
     pub building: String,
+    /// The building was not in this store and was created from the bundle.
     pub building_created: bool,
+    /// Sessions new to this store.
     pub sessions_added: u64,
+    /// Sessions already here that the bundle carried further (events appended).
     pub sessions_extended: u64,
+    /// Sessions already here with nothing new in the bundle.
     pub sessions_unchanged: u64,
+    /// Events appended, over all the sessions.
     pub events_added: u64,
 }
 
