@@ -15,19 +15,8 @@ fn last_json(text: &str) -> serde_json::Value {
     serde_json::from_str(text.lines().last().expect("a line")).expect("JSON")
 }
 
-/// `simulate --json` on a fixture with start = end, seed 2.
-fn simulate(
-    db: &Path,
-    building: &str,
-    start: &str,
-    budget: &str,
-    extra: &[&str],
-) -> serde_json::Value {
-    simulate_seeded(db, building, start, budget, "2", extra)
-}
-
 /// `simulate --json` on a fixture with start = end and the given seed.
-fn simulate_seeded(
+fn simulate(
     db: &Path,
     building: &str,
     start: &str,
@@ -87,7 +76,7 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
     let db = dir.path().join("b.db");
     let (building, start, budget, algo) = SURVEYS[1];
     let human = wrong_turns(algo);
-    let v = simulate(&db, building, start, budget, &human);
+    let v = simulate(&db, building, start, budget, "2", &human);
     let b: f64 = budget.parse().expect("budget");
     assert_eq!(v["status"], "finished", "{v}");
     assert!(f(&v, "wrong_turns") >= 3.0, "{v}");
@@ -95,7 +84,7 @@ fn thirty_percent_wrong_turns_end_within_budget_plus_five_percent() {
     assert!(f(&v, "true_walked_m") <= 1.05 * b, "{building}: {v}");
     let mut no_reserve = human.to_vec();
     no_reserve.push("--no-reserve");
-    let w = simulate(&db, building, start, budget, &no_reserve);
+    let w = simulate(&db, building, start, budget, "2", &no_reserve);
     assert!(
         f(&w, "walked_m") > 1.1 * b,
         "{building} without reserve: {w}"
@@ -124,10 +113,10 @@ fn thirty_percent_wrong_turns_keep_the_budget_on_average() {
     let (mut with, mut without) = (0.0, 0.0);
     for seed in seeds {
         let seed = seed.to_string();
-        let v = simulate_seeded(&db, building, start, budget, &seed, &human);
+        let v = simulate(&db, building, start, budget, &seed, &human);
         assert_eq!(v["status"], "finished", "{v}");
         with += f(&v, "walked_m") / b / n;
-        let w = simulate_seeded(&db, building, start, budget, &seed, &no_reserve);
+        let w = simulate(&db, building, start, budget, &seed, &no_reserve);
         assert_eq!(w["reserve_m"], 0.0);
         without += f(&w, "walked_m") / b / n;
     }
@@ -149,6 +138,7 @@ fn a_robot_that_follows_the_plan_collects_exactly_the_planned_utility() {
             building,
             start,
             budget,
+            "2",
             &["--surveyor", "robot", "--algorithm", algo],
         );
         assert!(f(&v, "plan_length_m") > 0.5 * f(&v, "budget_m"), "{v}");
@@ -178,9 +168,17 @@ fn sessions_lists_and_evaluate_judges_what_was_collected() {
         "area-one.json",
         "r0c0",
         "45",
+        "2",
         &["--surveyor", "human", "--deviate", "0.3"],
     );
-    let robot = simulate(&db, "area-one.json", "r0c0", "40", &["--surveyor", "robot"]);
+    let robot = simulate(
+        &db,
+        "area-one.json",
+        "r0c0",
+        "40",
+        "2",
+        &["--surveyor", "robot"],
+    );
     assert!(f(&human, "replans") >= 1.0, "{human}");
 
     // `events` counts every event of the log, the replans too.

@@ -3,7 +3,7 @@
 
 use std::process::Command;
 
-use crate::store_common::{BIN, DEMO_BUILDING, demo_route};
+use crate::store_common::{BIN, DEMO_BUILDING, demo_name, demo_route, run, run_ok};
 
 fn simulate(db: Option<&std::path::Path>, extra: &[&str]) -> std::process::Output {
     let mut c = Command::new(BIN);
@@ -58,23 +58,16 @@ fn json_summary_is_the_last_line_and_the_session_is_stored() {
 
     // The collected fingerprints are in the database, one CSV row each.
     let csv = dir.path().join("c.csv");
-    let exp = Command::new(BIN)
-        .arg("--db")
-        .arg(&db)
-        .args([
+    run_ok(
+        &db,
+        &[
             "export",
-            "Demo building (synthetic)",
+            &demo_name(),
             "--collected",
             "csv",
             "-o",
-        ])
-        .arg(&csv)
-        .output()
-        .expect("export");
-    assert!(
-        exp.status.success(),
-        "{}",
-        String::from_utf8_lossy(&exp.stderr)
+            csv.to_str().expect("utf-8"),
+        ],
     );
     let rows = std::fs::read_to_string(&csv).expect("csv").lines().count() as u64;
     assert_eq!(rows, samples + 1);
@@ -136,13 +129,12 @@ fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
         dense.join(",")
     );
     std::fs::write(&file, text).expect("write");
-    let out = Command::new(BIN)
-        .arg("--db")
-        .arg(&db)
-        .arg("simulate")
-        .arg("--building")
-        .arg(&file)
-        .args([
+    let out = run(
+        &db,
+        &[
+            "simulate",
+            "--building",
+            file.to_str().expect("utf-8"),
             "--start",
             "a",
             "--end",
@@ -151,9 +143,8 @@ fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
             "20",
             "--surveyor",
             "robot",
-        ])
-        .output()
-        .expect("run trailprint simulate");
+        ],
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
@@ -162,15 +153,6 @@ fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
             && err.contains("need about 550 MiB"),
         "{err}"
     );
-    let plans = Command::new(BIN)
-        .arg("--db")
-        .arg(&db)
-        .arg("plans")
-        .output()
-        .expect("run trailprint plans");
-    assert!(
-        String::from_utf8_lossy(&plans.stdout).contains("no plans"),
-        "{}",
-        String::from_utf8_lossy(&plans.stdout)
-    );
+    let plans = run_ok(&db, &["plans"]);
+    assert!(plans.contains("no plans"), "{plans}");
 }
