@@ -197,18 +197,33 @@ fn vertical_lengths(b: &Building) -> Vec<(String, String, f64)> {
         .collect()
 }
 
+/// [`import`] of a clean test map: the format detected, the building's name and floor ids
+/// are `format`, `name` and `floors`, nothing is warned of or dropped, and the building is
+/// walkable ([`check_walkable`]).
+fn import_clean(
+    fixture: &str,
+    format: Format,
+    name: &str,
+    floors: &[i64],
+) -> (FloorplanImport, Building) {
+    let (r, b) = import(fixture);
+    assert_eq!(r.format, format, "{fixture}");
+    assert_eq!(b.name, name);
+    assert_eq!(b.floors.iter().map(|f| f.id).collect::<Vec<_>>(), floors);
+    assert!(r.warnings.is_empty(), "{fixture}: {:?}", r.warnings);
+    assert!(r.dropped.is_empty(), "{fixture}: {:?}", r.dropped);
+    check_walkable(&b);
+    (r, b)
+}
+
 #[test]
 fn office_on_two_levels_is_walkable_and_joined() {
-    let (r, b) = import("office-l.geojson");
-    assert_eq!(r.format, Format::OsmIndoor);
-    assert_eq!(b.name, "Rue des Bureaux 12");
-    assert_eq!(
-        b.floors.iter().map(|f| f.id).collect::<Vec<_>>(),
-        vec![0, 1]
+    let (r, b) = import_clean(
+        "office-l.geojson",
+        Format::OsmIndoor,
+        "Rue des Bureaux 12",
+        &[0, 1],
     );
-    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
-    assert!(r.dropped.is_empty(), "{:?}", r.dropped);
-    check_walkable(&b);
 
     // Rooms with a door: a door vertex at the door, joined to the room and the corridor.
     for (room, x, y, floor) in [
@@ -269,18 +284,9 @@ fn office_on_two_levels_is_walkable_and_joined() {
 
 #[test]
 fn mall_imdf_folder_and_zip() {
-    let (r, b) = import("mall-imdf");
-    assert_eq!(r.format, Format::Imdf);
-    assert_eq!(b.name, "Galerie Test");
-    assert_eq!(
-        b.floors
-            .iter()
-            .map(|f| (f.id, f.name.clone().unwrap()))
-            .collect::<Vec<_>>(),
-        vec![(0, "0".to_string()), (1, "1".to_string())]
-    );
-    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
-    check_walkable(&b);
+    let (r, b) = import_clean("mall-imdf", Format::Imdf, "Galerie Test", &[0, 1]);
+    let floor_names: Vec<_> = b.floors.iter().map(|f| f.name.as_deref()).collect();
+    assert_eq!(floor_names, [Some("0"), Some("1")]);
     // Nothing stands in, or walks through, the hall's pillar.
     let pillar = rect_at(&b, (19.0, 8.0), (21.0, 10.0));
     for e in b
