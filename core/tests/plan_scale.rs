@@ -58,6 +58,13 @@ fn round_trip(b: &Building, budget: f64, k: Kernel) -> PlanRequest {
     PlanRequest::new(start, start, budget, k)
 }
 
+/// The [`office`] and a [`round_trip`] on it with half its total edge length as budget.
+fn office_half_round_trip() -> (Arc<Building>, PlanRequest) {
+    let (b, k) = office();
+    let req = round_trip(&b, 0.5 * b.total_edge_length(), k);
+    (b, req)
+}
+
 /// The exact `f_D` of SPEC 3 of `walk`, by a fresh engine with the kernel and surveyor of
 /// `req`.
 fn exact_utility(b: &Arc<Building>, req: &PlanRequest, walk: &[usize]) -> f64 {
@@ -93,9 +100,8 @@ fn coverage_walks_to_the_nearest_unwalked_edge_while_the_way_back_fits() {
 #[test]
 fn auto_on_a_large_building_uses_the_budget_and_beats_the_systematic_walk() {
     let _serial = crate::serial();
-    let (b, k) = office();
-    let budget = 0.5 * b.total_edge_length();
-    let mut req = round_trip(&b, budget, k);
+    let (b, mut req) = office_half_round_trip();
+    let budget = req.budget;
     req.settings.algorithm = Algorithm::Coverage;
     let cov = plan(b.clone(), &req, &Control::new()).expect("coverage");
     req.settings.algorithm = Algorithm::Auto;
@@ -315,9 +321,8 @@ impl Observer for Bests {
 #[test]
 fn progress_carries_the_best_walks_length_and_cancel_returns_that_walk() {
     let _serial = crate::serial();
-    let (b, k) = office();
-    let budget = 0.5 * b.total_edge_length();
-    let mut req = round_trip(&b, budget, k);
+    let (b, mut req) = office_half_round_trip();
+    let budget = req.budget;
     req.settings.time_limit = Some(Duration::from_secs(30));
     let obs = Arc::new(Bests::default());
     let token = Arc::new(AtomicBool::new(false));
@@ -459,23 +464,29 @@ fn a_budget_far_beyond_the_building_is_refused_with_what_would_do() {
     );
 }
 
-/// Reversals per 100 m of the walk `r` planned for `req` on `b` with kernel `k`.
-fn reversals_per_100m(b: &Arc<Building>, k: Kernel, req: &PlanRequest, r: &PlanResult) -> f64 {
+/// Reversals per 100 m of the walk `r` planned for `req` on `b`.
+fn reversals_per_100m(b: &Arc<Building>, req: &PlanRequest, r: &PlanResult) -> f64 {
     let w = &r.walk_indices;
     let end = *w.last().expect("walk");
-    let p = Problem::new(b.clone(), k, req.settings.model, w[0], end, req.budget).expect("problem");
+    let p = Problem::new(
+        b.clone(),
+        req.kernel,
+        req.settings.model,
+        w[0],
+        end,
+        req.budget,
+    )
+    .expect("problem");
     100.0 * reversals(&p, w) as f64 / r.length_m
 }
 
 #[test]
 fn a_surveyors_walk_rarely_paces_back_along_the_edge_just_walked() {
     let _serial = crate::serial();
-    let (b, k) = office();
-    let budget = 0.5 * b.total_edge_length();
-    let mut req = round_trip(&b, budget, k);
+    let (b, mut req) = office_half_round_trip();
     req.settings.model = Surveyor::human();
     let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-    let per_100m = reversals_per_100m(&b, k, &req, &r);
+    let per_100m = reversals_per_100m(&b, &req, &r);
     // Measured: 0 to 0.5 per 100 m whatever the time the search gets (0.1 s to 4 s).
     assert!(per_100m <= 1.0, "{per_100m} reversals per 100 m");
 }
@@ -493,7 +504,7 @@ fn a_surveyors_walk_on_a_small_building_does_not_pace_either() {
         let mut req = PlanRequest::new("f0-c00", "f0-c15", budget, k);
         req.settings.model = Surveyor::human();
         let r = plan(b.clone(), &req, &Control::new()).expect("plan");
-        let per_100m = reversals_per_100m(&b, k, &req, &r);
+        let per_100m = reversals_per_100m(&b, &req, &r);
         // Measured: 3.3, 1.7 and 3.5 per 100 m.
         assert!(
             per_100m <= 6.0,
