@@ -8,27 +8,31 @@ mod x86 {
     use std::arch::x86_64::*;
     use std::time::Instant;
 
+    /// The twelve independent `acc = acc * a + b` chains, `iters` steps each, on the vectors
+    /// `$set1` broadcasts to, multiplied and added by `$fmadd`: the same code at each width,
+    /// expanded inside the `#[target_feature]` function that enables it.
+    macro_rules! fma_chains {
+        ($set1:ident, $fmadd:ident, $iters:expr) => {{
+            let mut acc = [$set1(1.0); 12];
+            let (a, b) = ($set1(0.999_999), $set1(1e-7));
+            for _ in 0..$iters {
+                for x in &mut acc {
+                    *x = $fmadd(*x, a, b);
+                }
+            }
+            acc
+        }};
+    }
+
     #[target_feature(enable = "avx512f")]
     fn fma512(iters: usize) -> f64 {
-        let mut acc = [_mm512_set1_pd(1.0); 12];
-        let (a, b) = (_mm512_set1_pd(0.999_999), _mm512_set1_pd(1e-7));
-        for _ in 0..iters {
-            for x in &mut acc {
-                *x = _mm512_fmadd_pd(*x, a, b);
-            }
-        }
+        let acc = fma_chains!(_mm512_set1_pd, _mm512_fmadd_pd, iters);
         acc.iter().map(|&x| _mm512_reduce_add_pd(x)).sum()
     }
 
     #[target_feature(enable = "avx2,fma")]
     fn fma256(iters: usize) -> f64 {
-        let mut acc = [_mm256_set1_pd(1.0); 12];
-        let (a, b) = (_mm256_set1_pd(0.999_999), _mm256_set1_pd(1e-7));
-        for _ in 0..iters {
-            for x in &mut acc {
-                *x = _mm256_fmadd_pd(*x, a, b);
-            }
-        }
+        let acc = fma_chains!(_mm256_set1_pd, _mm256_fmadd_pd, iters);
         let mut s = 0.0;
         for x in acc {
             let mut t = [0.0; 4];
