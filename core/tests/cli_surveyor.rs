@@ -192,7 +192,7 @@ fn plans_are_listed_and_shown_with_their_walk() {
 
 #[test]
 fn vertices_lists_ids_labels_floors_and_positions() {
-    let (_dir, db) = demo_db();
+    let (_dir, db, _) = demo_db();
     let b = trailprint::Building::from_json(trailprint::synth::DEMO_BUILDING_JSON, "demo")
         .expect("demo");
     let text = run_ok(&db, &["vertices", &b.name]);
@@ -244,8 +244,7 @@ fn vertices_lists_ids_labels_floors_and_positions() {
 
 #[test]
 fn fit_of_a_building_in_the_database_is_stored() {
-    let (_dir, db) = demo_db();
-    let name = demo_name();
+    let (_dir, db, name) = demo_db();
     let fits = |db: &Path| -> i64 {
         let v: serde_json::Value =
             serde_json::from_str(&run_ok(db, &["buildings", "--json"])).expect("json");
@@ -608,8 +607,7 @@ fn render_draws_plans_sessions_and_teams() {
 
 #[test]
 fn team_plan_keeps_its_walks_as_plans() {
-    let (_dir, db) = demo_db();
-    let name = demo_name();
+    let (_dir, db, name) = demo_db();
     let out = run_ok(
         &db,
         &[
@@ -766,6 +764,17 @@ fn every_mark_on_a_map_has_its_legend_entry() {
     let plan_id = plan["plan_id"].as_i64().expect("plan id").to_string();
     let sim = simulate_walk(&db, &demo);
     let session = sim["session_id"].as_i64().expect("session id").to_string();
+    // Two surveyors, the first walking f0-c00 to f0-c01, the second the walk given.
+    let team_with = |second| {
+        vec![
+            "--building",
+            &demo,
+            "--team",
+            "f0-c00,f0-c01",
+            "--team",
+            second,
+        ]
+    };
     let cases: Vec<(&str, Vec<&str>, Option<bool>)> = vec![
         (
             "office, start = end, ids",
@@ -784,28 +793,10 @@ fn every_mark_on_a_map_has_its_legend_entry() {
         ),
         (
             "team sharing an edge",
-            vec![
-                "--building",
-                &demo,
-                "--team",
-                "f0-c00,f0-c01",
-                "--team",
-                "f0-c02,f0-c01,f0-c00",
-            ],
+            team_with("f0-c02,f0-c01,f0-c00"),
             Some(true),
         ),
-        (
-            "team apart",
-            vec![
-                "--building",
-                &demo,
-                "--team",
-                "f0-c00,f0-c01",
-                "--team",
-                "f0-c03,f0-c04",
-            ],
-            Some(false),
-        ),
+        ("team apart", team_with("f0-c03,f0-c04"), Some(false)),
         ("session", vec!["--session", &session], None),
     ];
     for (what, args, repeat) in cases {
@@ -859,8 +850,7 @@ fn every_mark_on_a_map_has_its_legend_entry() {
 /// collected CSV holds numbers to the millimetre and 0.01 dB, not `4.199999999999999`.
 #[test]
 fn robot_time_fit_without_pilot_and_collected_csv_digits() {
-    let (dir, db) = demo_db();
-    let demo = demo_name();
+    let (dir, db, demo) = demo_db();
     let out = on_corridor(
         &db,
         "plan",

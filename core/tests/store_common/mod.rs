@@ -127,11 +127,12 @@ pub fn temp_db() -> (tempfile::TempDir, PathBuf) {
     (dir, db)
 }
 
-/// [`temp_db`] with the demo building imported by the command line.
-pub fn demo_db() -> (tempfile::TempDir, PathBuf) {
+/// [`temp_db`] with the demo building imported by the command line, and the building's
+/// name (what `--building` takes).
+pub fn demo_db() -> (tempfile::TempDir, PathBuf, String) {
     let (dir, db) = temp_db();
     run_ok(&db, &["import", DEMO_BUILDING]);
-    (dir, db)
+    (dir, db, demo_name())
 }
 
 /// Runs the binary with `--db db` and `args`.
