@@ -193,6 +193,19 @@ struct Walker<'a, F> {
     t: f64,
 }
 
+/// The edge the simulated surveyor walks next.
+struct Leg {
+    /// The vertex it leads to.
+    to: usize,
+    /// Whether it leaves the planned walk (a wrong turn).
+    wrong: bool,
+    /// Its length, metres (0 where no edge joins the two vertices).
+    len: f64,
+    /// Its two ends: where the surveyor stands and `to`.
+    pa: Point,
+    pb: Point,
+}
+
 impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
     fn emit(&mut self, ev: Event) -> Result<Ack> {
         let ack = self.session.record(ev.clone())?;
@@ -242,6 +255,20 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
         (pick, true)
     }
 
+    /// The edge walked next from `at` (reached from `prev`) toward `planned`, a wrong turn
+    /// drawn as [`Self::choose`] draws it.
+    fn next_leg(&mut self, at: usize, prev: Option<usize>, planned: usize) -> Leg {
+        let (to, wrong) = self.choose(at, prev, planned);
+        let b = &self.building;
+        Leg {
+            to,
+            wrong,
+            len: b.edge_between(at, to).map_or(0.0, |e| e.length),
+            pa: b.vertices[at].pos,
+            pb: b.vertices[to].pos,
+        }
+    }
+
     /// Checks in at `at`. Still off the route (no replan): the walk ahead starts by going
     /// back to `prev`, where the surveyor left it (`due`: a check-in is expected there);
     /// else the walk ahead is the session's, replanned or not.
@@ -270,7 +297,6 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
     }
 
     fn human(&mut self, speed: f64, scan_ms: f64) -> Result<()> {
-        let b = self.building.clone();
         let mut at = self.session.tracker().route()[0];
         let mut prev: Option<usize> = None;
         let mut plan = self.plan_ahead();
@@ -280,24 +306,22 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             if self.over_limit() {
                 return Ok(());
             }
-            let (nxt, wrong) = self.choose(at, prev, planned);
-            let len = b.edge_between(at, nxt).map_or(0.0, |e| e.length);
-            let (pa, pb) = (b.vertices[at].pos, b.vertices[nxt].pos);
+            let leg = self.next_leg(at, prev, planned);
             // The surveyor stops at a check-in (after a wrong turn, at the vertex reached):
             // the last step there is a short one.
-            let stop = wrong || due || (plan.len() == 1);
+            let stop = leg.wrong || due || (plan.len() == 1);
             let mut s = carry;
-            while s < len {
+            while s < leg.len {
                 let mut stride = (self.opts.true_step_m
                     * (1.0 + self.opts.stride_noise * normal(&mut self.rng)))
                 .max(0.1);
                 if stop {
-                    stride = stride.min(len - s);
+                    stride = stride.min(leg.len - s);
                 }
                 let dt = stride / speed * 1000.0;
                 while next_scan <= self.t + dt {
-                    let frac = ((s + stride * (next_scan - self.t) / dt) / len).clamp(0.0, 1.0);
-                    let p = point_on_edge(&pa, &pb, frac);
+                    let frac = ((s + stride * (next_scan - self.t) / dt) / leg.len).clamp(0.0, 1.0);
+                    let p = point_on_edge(&leg.pa, &leg.pb, frac);
                     let readings = self.world.scan(&p, &mut self.rng);
                     self.emit(Event::Scan {
                         t_ms: (next_scan.round() as i64).max(self.t_ms()),
@@ -314,13 +338,13 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
                 })?;
             }
             prev = Some(at);
-            at = nxt;
+            at = leg.to;
             if stop {
                 carry = 0.0;
                 self.t += self.opts.check_in_ms as f64;
                 self.check_in(at, prev, &mut plan, true)?;
             } else {
-                carry = s - len;
+                carry = s - leg.len;
                 plan.pop_front();
             }
         }
@@ -341,28 +365,26 @@ impl<F: FnMut(&Session, &Event, &Ack) -> Result<()>> Walker<'_, F> {
             if self.over_limit() {
                 return Ok(());
             }
-            let (nxt, wrong) = self.choose(at, prev, planned);
-            let len = b.edge_between(at, nxt).map_or(0.0, |e| e.length);
-            let (pa, pb) = (b.vertices[at].pos, b.vertices[nxt].pos);
+            let leg = self.next_leg(at, prev, planned);
             let start_arc = arc;
-            let end_arc = start_arc + len;
+            let end_arc = start_arc + leg.len;
             loop {
                 // The sample placement of `WalkSampler`, arithmetic for arithmetic.
                 let s = next_k as f64 * interval;
                 if s > end_arc + ARC_EPS {
                     break;
                 }
-                let frac = ((s - start_arc) / len).clamp(0.0, 1.0);
-                let p = point_on_edge(&pa, &pb, frac);
+                let frac = ((s - start_arc) / leg.len).clamp(0.0, 1.0);
+                let p = point_on_edge(&leg.pa, &leg.pb, frac);
                 self.t += dt;
                 self.pose_and_scan(&p)?;
                 next_k += 1;
             }
             arc = end_arc;
-            self.report.true_walked_m += len;
+            self.report.true_walked_m += leg.len;
             prev = Some(at);
-            at = nxt;
-            if wrong || self.session.tracker().off_route() {
+            at = leg.to;
+            if leg.wrong || self.session.tracker().off_route() {
                 self.check_in(at, prev, &mut plan, false)?;
             } else {
                 plan.pop_front();
