@@ -10,11 +10,17 @@ use std::fmt::Write as _;
 
 use crate::render::esc;
 
+/// Width of the whole chart, SVG px.
 const WIDTH: f64 = 720.0;
+/// Height of the whole chart, SVG px.
 const HEIGHT: f64 = 440.0;
+/// Margin left of the plot area, px: the y axis's ticks and label.
 const LEFT: f64 = 70.0;
+/// Margin right of the plot area, px: the legend.
 const RIGHT: f64 = 170.0;
+/// Margin above the plot area, px: the title and subtitle.
 const TOP: f64 = 50.0;
+/// Margin below the plot area, px: the x axis's ticks and label.
 const BOTTOM: f64 = 55.0;
 
 /// The colour of series `i` (matplotlib's tab10).
@@ -202,7 +208,6 @@ impl Frame {
     }
 }
 
-/// The document head, title, axes, ticks, labels (everything but the data).
 /// The texts around a chart.
 struct Labels<'a> {
     title: &'a str,
@@ -211,6 +216,7 @@ struct Labels<'a> {
     y: &'a str,
 }
 
+/// The document head, title, axes, ticks, labels (everything but the data).
 fn frame_svg(s: &mut String, f: &Frame, labels: &Labels, xt: &[f64], yt: &[f64]) {
     let Labels {
         title,
