@@ -17,7 +17,8 @@ skipped: the floors where `auto` runs its small-building portfolio.
 
 Prints one line per row (with a person's reversals per 100 m) and flags a row where auto is below 1.05x coverage, uses less than
 95% of the budget, or takes longer than 2.35 s (wall, process start-up included); a
-refusal for memory is printed as such. The last line counts the flagged rows.
+refusal for memory is printed as such. The last two lines name the folder that keeps the
+buildings and count the flagged rows.
 Needs the release binary (TRAILPRINT_BIN, else target/release/trailprint).
 """
 import json, math, os, queue, random, subprocess, sys, tempfile, threading, time
@@ -145,6 +146,7 @@ def main():
             if u1 < u0:
                 flagged += 1
                 print(f"{name} {model}: utility falls from {u0:.2f} at {b0:.0f} m to {u1:.2f} at {b1:.0f} m")
+    print(f"buildings kept in {tmp} (b0.json ...), to plan a row again")
     print(f"{len(results)} rows, {flagged} flagged, {refused} refused")
 
 
