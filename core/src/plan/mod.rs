@@ -252,6 +252,7 @@ fn plan_validated(
         budget: req.budget,
         near: Arc::default(),
         order: Arc::default(),
+        exact_cost: Arc::default(),
         near_base_max: usize::try_from(headroom)
             .unwrap_or(usize::MAX)
             .min(crate::utility::engine::NEAR_BASE_MAX),

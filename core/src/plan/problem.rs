@@ -40,6 +40,11 @@ pub struct Problem {
     /// Each vertex's nearest edges in order, built per vertex on first use and shared by
     /// clones (see [`Problem::nearest_edges`]).
     pub order: Arc<OnceLock<EdgeOrder>>,
+    /// What an exact evaluation costs on this device, timed once by
+    /// [`super::scale::exact_time_estimate`] and shared by clones: a baseline's held walk
+    /// and then genetic's population each timed two prefixes of a walk before (about
+    /// 0.15 s each on a 3,161-vertex floor, out of a limit the set-up has mostly used).
+    pub(in crate::plan) exact_cost: Arc<OnceLock<super::scale::ExactCost>>,
     /// Most doubles the large-building search may keep of its walk's factorisation to
     /// score walks near it ([`crate::utility::NearBase`]): the headroom the request's
     /// memory budget leaves beyond its estimate, at most
@@ -69,6 +74,7 @@ impl Problem {
             budget,
             near: Arc::default(),
             order: Arc::default(),
+            exact_cost: Arc::default(),
             near_base_max: crate::utility::engine::NEAR_BASE_MAX,
         })
     }

@@ -231,7 +231,8 @@ impl ExactCost {
 
 /// What one exact evaluation of `walk` costs on this thread, when it may be dear beside
 /// `limit` (`None` when it is certainly cheap, see [`CHEAP_WORK_PER_SECOND`]): the
-/// estimated time and the cost model it comes from. Two prefixes of `walk`, with about a
+/// estimated time and the cost model it comes from, timed on the problem's first dear
+/// walk and kept ([`Problem::exact_cost`]) for the others. Two prefixes of `walk`, with about a
 /// 64th and a quarter of its work, are evaluated and timed, and the line through the two
 /// points gives the fixed part and the part per multiply-add; timing them costs about
 /// 27% of an evaluation. A model alone would be off by the device's speed (several times
@@ -252,6 +253,10 @@ pub(in crate::plan) fn exact_time_estimate(
     let full = p.engine.utility_work(walk)?;
     if full < CHEAP_WORK_PER_SECOND * limit.as_secs_f64() || walk.len() < 3 {
         return Ok(None);
+    }
+    // Timed once per problem (and its clones): the model is the device's, not the walk's.
+    if let Some(cost) = p.exact_cost.get() {
+        return Ok(Some((cost.time(full), *cost)));
     }
     // The largest k with work(walk[..k]) <= target (at least one vertex).
     let prefix_for = |target: f64| -> Result<usize> {
@@ -276,6 +281,7 @@ pub(in crate::plan) fn exact_time_estimate(
     let k2 = prefix_for(full / 4.0)?;
     let k1 = prefix_for(full / 64.0)?.min(k2.saturating_sub(1)).max(1);
     let cost = ExactCost::through(timed(k1)?, timed(k2)?);
+    let cost = *p.exact_cost.get_or_init(|| cost);
     Ok(Some((cost.time(full), cost)))
 }
 
@@ -1677,6 +1683,30 @@ pub(super) mod tests {
         let short = leg(&half, &whole_walk(&half), &[], None, &run);
         let w2 = p.engine.utility_work(&short).expect("work");
         assert!(w2 < 0.5 * work, "{w2:e} against {work:e}");
+    }
+
+    /// The cost model is timed on a problem's first dear walk and kept, for its clones
+    /// too: another walk's estimate is that model's time for its work.
+    #[test]
+    fn the_exact_cost_is_timed_once_per_problem() {
+        let p = grid_problem(300.0);
+        let run = Run::new(Control::new(), None);
+        let limit = Duration::from_millis(100);
+        let walk = leg(&p, &whole_walk(&p), &[], None, &run);
+        assert!(p.exact_cost.get().is_none());
+        let (_, cost) = exact_time_estimate(&p, &walk, limit)
+            .expect("estimate")
+            .expect("timed");
+        assert_eq!(p.exact_cost.get(), Some(&cost));
+        let q = p.with_ends(0, 0, 250.0);
+        let other = leg(&q, &whole_walk(&q), &[], None, &run);
+        assert_ne!(other, walk);
+        let work = q.engine.utility_work(&other).expect("work");
+        let (t, kept) = exact_time_estimate(&q, &other, limit)
+            .expect("estimate")
+            .expect("dear");
+        assert_eq!(kept, cost);
+        assert_eq!(t, cost.time(work));
     }
 
     /// A plan whose final exact evaluation cannot end within the limit and its allowance
