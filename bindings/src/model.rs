@@ -110,6 +110,10 @@ pub struct FitSummary {
     pub log_likelihood: f64,
     /// Access points used by the fit, sorted by name.
     pub aps_used: Vec<String>,
+    /// Whether each access point was fitted only on the locations that hear it: the
+    /// rule on a large floor, where none is heard at half the pilot locations (SPEC 2's
+    /// rule, `false`).
+    pub heard_only: bool,
     /// Number of pilot locations.
     pub locations: u32,
 }
@@ -120,6 +124,7 @@ impl From<trailprint::gp::FitResult> for FitSummary {
             kernel: f.kernel.into(),
             log_likelihood: f.log_likelihood,
             aps_used: f.aps_used,
+            heard_only: f.ap_rule == trailprint::gp::fit::ApRule::HeardOnly,
             locations: u32::try_from(f.locations).unwrap_or(u32::MAX),
         }
     }

@@ -12,6 +12,7 @@
 mod plan_common;
 mod store_common;
 
+mod cli_fit;
 mod cli_pipe;
 mod cli_store;
 mod cli_surveyor;

@@ -262,6 +262,7 @@ fn fit(at: i64, ll: f64) -> FitRecord {
         kernel: Kernel::new(168.4, 23.86, 1.08),
         log_likelihood: ll,
         aps_used: vec!["ap-07".into(), "ap-01".into(), "new-ap".into()],
+        ap_rule: Default::default(),
         fitted_ms: at,
     }
 }
@@ -298,6 +299,7 @@ fn fits_are_recorded_and_the_latest_is_returned() {
         kernel: Kernel::new(103.22, 32.17, 3.3),
         log_likelihood: -812.5,
         aps_used: vec!["ap-01".into(), "ap-02".into()],
+        ap_rule: trailprint::gp::fit::ApRule::HalfOfLocations,
         locations: 30,
     };
     store
@@ -306,6 +308,28 @@ fn fits_are_recorded_and_the_latest_is_returned() {
     let latest = store.latest_fit(id).expect("latest").expect("some");
     assert_eq!(latest.record.kernel, result.kernel);
     assert_eq!(latest.record.aps_used, result.aps_used);
+    assert_eq!(latest.record.ap_rule, result.ap_rule);
+    // A fit on a large floor keeps its rule (migration 0004), and drops it with the fit.
+    let heard_only = trailprint::gp::fit::FitResult {
+        ap_rule: trailprint::gp::fit::ApRule::HeardOnly,
+        ..result
+    };
+    let h = store
+        .record_fit(id, &FitRecord::from_fit(&heard_only, 5_000))
+        .expect("heard-only fit");
+    let latest = store.latest_fit(id).expect("latest").expect("some");
+    assert_eq!((latest.id, latest.record.ap_rule), (h, heard_only.ap_rule));
+    store
+        .with_connection(|c| {
+            let n: i64 = c.query_row(
+                "SELECT count(*) FROM fit_rules WHERE fit_id = ?1",
+                [h],
+                |r| r.get(0),
+            )?;
+            assert_eq!(n, 1);
+            Ok(())
+        })
+        .expect("count");
 }
 
 fn plan_record() -> PlanRecord {

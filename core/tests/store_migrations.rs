@@ -255,6 +255,7 @@ fn write_dump_fixture() {
                 kernel: Kernel::new(40.0, 6.0, 9.0),
                 log_likelihood: -123.5,
                 aps_used: vec!["aa:bb:cc:dd:ee:01".into()],
+                ap_rule: Default::default(),
                 fitted_ms: 1_700_000_000_000,
             },
         )

@@ -48,6 +48,7 @@ fn recorded_fit() -> FitRecord {
         kernel: RECORDED,
         log_likelihood: -10.0,
         aps_used: vec![],
+        ap_rule: Default::default(),
         fitted_ms: now_ms(),
     }
 }

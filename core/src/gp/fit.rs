@@ -6,6 +6,17 @@
 //! maximises the sum over access points of the GP log marginal likelihood over
 //! `(ln sf2, ln ell, ln sn2)`, by Nelder-Mead from several starts, within
 //! `sn2 >= 1 dB²` and `0.5 m <= ell <= 1000 m` (and `1e-2 <= sf2 <= 1e5 dB²`).
+//!
+//! # When no access point is heard at half the locations
+//! SPEC 2's rule then keeps nothing and leaves the fit undefined. That is the rule's
+//! common case on a large floor, not a fault of the data: an access point is heard some
+//! tens of metres around it, so on a 400 m corridor (`trailprint generate --rooms 40
+//! --corridor-length 400`, 20 pilot locations, 10 access points) none is heard at half of
+//! them. Rather than refuse, the fit then takes each access point heard at
+//! [`HEARD_ONLY_MIN`] locations or more on *the locations that hear it* (its readings
+//! centred on their own mean, no floor value): the likelihood of what was observed, with
+//! the same shared kernel ([`ApRule::HeardOnly`], reported with the fit). Decision record
+//! `docs/decisions/0007-fit-on-large-floors.md` has the reasons and what it gives.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -17,10 +28,40 @@ use crate::{Error, Result};
 /// RSS given to a kept access point that was not heard at a location, dBm.
 pub const MISSING_RSS: f64 = -100.0;
 
+/// Fewest pilot locations an access point must be heard at to enter a
+/// [`ApRule::HeardOnly`] fit: with fewer, its readings say next to nothing about a length
+/// scale.
+pub const HEARD_ONLY_MIN: usize = 4;
+
 /// Bounds of the fit, as `(min, max)` of each parameter.
 pub const SF2_BOUNDS: (f64, f64) = (1e-2, 1e5);
 pub const ELL_BOUNDS: (f64, f64) = (0.5, 1000.0);
 pub const SN2_BOUNDS: (f64, f64) = (1.0, 1e4);
+
+/// Which access points a fit used, and on which locations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ApRule {
+    /// SPEC 2: those heard at half the pilot locations or more, on every location (-100
+    /// dBm where not heard).
+    #[default]
+    HalfOfLocations,
+    /// When SPEC 2's rule keeps none: each access point heard at [`HEARD_ONLY_MIN`]
+    /// locations or more, on the locations that hear it (see the module docs).
+    HeardOnly,
+}
+
+impl ApRule {
+    /// What the rule says, for people.
+    pub fn describe(self) -> &'static str {
+        match self {
+            ApRule::HalfOfLocations => "heard at half the pilot locations or more (SPEC 2)",
+            ApRule::HeardOnly => {
+                "none heard at half the pilot locations: each on the locations that hear it"
+            }
+        }
+    }
+}
 
 /// The result of a fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -30,21 +71,36 @@ pub struct FitResult {
     pub log_likelihood: f64,
     /// The access points that entered the fit, sorted.
     pub aps_used: Vec<String>,
+    /// How they were chosen.
+    #[serde(default)]
+    pub ap_rule: ApRule,
     /// Number of pilot locations.
     pub locations: usize,
+}
+
+/// Pilot locations and the centred readings of the access points fitted on them.
+#[derive(Debug, Clone)]
+pub struct Group {
+    pub points: Vec<Point>,
+    /// One centred vector per access point, over `points`.
+    pub centred: Vec<DVector<f64>>,
 }
 
 /// The per-access-point data the likelihood is computed on.
 #[derive(Debug, Clone)]
 pub struct PilotData {
+    /// Every pilot location.
     pub points: Vec<Point>,
     pub aps: Vec<String>,
-    /// One centred vector per access point.
-    pub centred: Vec<DVector<f64>>,
+    pub rule: ApRule,
+    /// Under [`ApRule::HalfOfLocations`] one group (every location, every kept access
+    /// point); under [`ApRule::HeardOnly`] one per access point.
+    pub groups: Vec<Group>,
 }
 
 impl PilotData {
-    /// Selects access points and centres their readings as SPEC section 2 says.
+    /// Selects access points and centres their readings as SPEC section 2 says (or, when
+    /// that keeps none, as [`ApRule::HeardOnly`] does).
     pub fn from_fingerprints(pilot: &[Fingerprint]) -> Result<Self> {
         let n = pilot.len();
         if n < 3 {
@@ -58,52 +114,146 @@ impl PilotData {
                 *counts.entry(ap.as_str()).or_default() += 1;
             }
         }
-        let aps: Vec<String> = counts
+        let points: Vec<Point> = pilot.iter().map(Fingerprint::point).collect();
+        let centre = |y: Vec<f64>| {
+            let y = DVector::from_vec(y);
+            let mean = y.mean();
+            y.add_scalar(-mean)
+        };
+        let half: Vec<String> = counts
             .iter()
             .filter(|(_, c)| 2 * **c >= n)
             .map(|(ap, _)| ap.to_string())
             .collect();
-        if aps.is_empty() {
-            return Err(Error::Fit(format!(
-                "no access point is heard at half or more of the {n} pilot locations ({} access points heard in all)",
-                counts.len()
-            )));
-        }
-        let mut centred = Vec::with_capacity(aps.len());
-        for ap in &aps {
-            let y = DVector::from_iterator(
-                n,
-                pilot
-                    .iter()
-                    .map(|fp| fp.rss.get(ap).copied().unwrap_or(MISSING_RSS)),
-            );
-            let mean = y.mean();
-            centred.push(y.add_scalar(-mean));
-        }
-        if centred.iter().all(|y| y.norm_squared() < 1e-12) {
+        let (aps, rule, groups) = if !half.is_empty() {
+            let centred = half
+                .iter()
+                .map(|ap| {
+                    centre(
+                        pilot
+                            .iter()
+                            .map(|fp| fp.rss.get(ap).copied().unwrap_or(MISSING_RSS))
+                            .collect(),
+                    )
+                })
+                .collect();
+            let g = Group {
+                points: points.clone(),
+                centred,
+            };
+            (half, ApRule::HalfOfLocations, vec![g])
+        } else {
+            let heard: Vec<String> = counts
+                .iter()
+                .filter(|(_, c)| **c >= HEARD_ONLY_MIN)
+                .map(|(ap, _)| ap.to_string())
+                .collect();
+            if heard.is_empty() {
+                let most = counts.values().copied().max().unwrap_or(0);
+                return Err(Error::Fit(format!(
+                    "no access point is heard at half or more of the {n} pilot locations \
+                     ({} access points heard in all), nor at {HEARD_ONLY_MIN} or more of them \
+                     (the most: {most}): survey more pilot locations near the access points, \
+                     or give the kernel (sf2, ell, sn2) yourself",
+                    counts.len()
+                )));
+            }
+            let groups = heard
+                .iter()
+                .map(|ap| {
+                    let (pts, y): (Vec<Point>, Vec<f64>) = pilot
+                        .iter()
+                        .filter_map(|fp| fp.rss.get(ap).map(|&r| (fp.point(), r)))
+                        .unzip();
+                    Group {
+                        points: pts,
+                        centred: vec![centre(y)],
+                    }
+                })
+                .collect();
+            (heard, ApRule::HeardOnly, groups)
+        };
+        if groups
+            .iter()
+            .flat_map(|g| &g.centred)
+            .all(|y| y.norm_squared() < 1e-12)
+        {
             return Err(Error::Fit(
                 "every kept access point reads the same RSS at every pilot location: no spatial variation to fit".into(),
             ));
         }
         Ok(PilotData {
-            points: pilot.iter().map(Fingerprint::point).collect(),
+            points,
             aps,
-            centred,
+            rule,
+            groups,
         })
     }
 
-    /// Summed log marginal likelihood of all access points under `kernel`.
-    pub fn log_likelihood(&self, kernel: &Kernel) -> Option<f64> {
-        let n = self.points.len();
-        let k = DMatrix::from_fn(n, n, |i, j| {
-            kernel.k(&self.points[i], &self.points[j]) + if i == j { kernel.sn2 } else { 0.0 }
-        });
-        let (quad, logdet) = crate::utility::reference::quad_and_logdet(&k, &self.centred)?;
-        let a = self.centred.len() as f64;
-        Some(
-            -0.5 * quad - 0.5 * a * logdet - 0.5 * a * n as f64 * (2.0 * std::f64::consts::PI).ln(),
-        )
+    /// Every centred reading vector, over all groups.
+    pub fn centred(&self) -> impl Iterator<Item = &DVector<f64>> {
+        self.groups.iter().flat_map(|g| &g.centred)
     }
+
+    /// Summed log marginal likelihood of all access points under `kernel`: SPEC 2's, of
+    /// the centred readings; under [`ApRule::HeardOnly`] the restricted likelihood
+    /// ([`restricted_log_likelihood`]) of each access point's readings.
+    pub fn log_likelihood(&self, kernel: &Kernel) -> Option<f64> {
+        let mut total = 0.0;
+        for g in &self.groups {
+            let n = g.points.len();
+            let k = DMatrix::from_fn(n, n, |i, j| {
+                kernel.k(&g.points[i], &g.points[j]) + if i == j { kernel.sn2 } else { 0.0 }
+            });
+            total += match self.rule {
+                ApRule::HalfOfLocations => {
+                    let (quad, logdet) =
+                        crate::utility::reference::quad_and_logdet(&k, &g.centred)?;
+                    let a = g.centred.len() as f64;
+                    -0.5 * quad
+                        - 0.5 * a * logdet
+                        - 0.5 * a * n as f64 * (2.0 * std::f64::consts::PI).ln()
+                }
+                ApRule::HeardOnly => g
+                    .centred
+                    .iter()
+                    .map(|y| restricted_log_likelihood(&k, y))
+                    .sum::<Option<f64>>()?,
+            };
+        }
+        Some(total)
+    }
+}
+
+/// The restricted (REML) log likelihood of readings `y` under covariance `k` with an
+/// unknown constant mean: the likelihood of `y`'s contrasts, which no mean shifts,
+///
+/// `-1/2 (y' K^-1 y - (1' K^-1 y)^2 / 1' K^-1 1) - 1/2 ln det K - 1/2 ln(1' K^-1 1)
+///  - (n - 1)/2 ln 2 pi`.
+///
+/// Why not SPEC 2's likelihood of the readings centred on their sample mean: an access
+/// point heard only on a stretch of a few length scales loses most of its variance to
+/// that centring, and the fit then reads short, weak correlation (readings drawn from
+/// `sf2 = 40, ell = 6 m, sn2 = 4`, each access point heard on 12 to 45 m of a 135 m
+/// line: 33.2, 3.5 m, 1.07 by centring; the restricted likelihood recovers it, see the
+/// tests). `None` when `k` is not positive definite.
+fn restricted_log_likelihood(k: &DMatrix<f64>, y: &DVector<f64>) -> Option<f64> {
+    let n = y.len();
+    let l = k.clone().cholesky()?;
+    let kinv_y = l.solve(y);
+    let kinv_1 = l.solve(&DVector::from_element(n, 1.0));
+    let one_k_one = kinv_1.sum();
+    if one_k_one <= 0.0 || !one_k_one.is_finite() {
+        return None;
+    }
+    let quad = y.dot(&kinv_y) - kinv_y.sum().powi(2) / one_k_one;
+    let logdet = 2.0 * l.l().diagonal().iter().map(|d| d.ln()).sum::<f64>();
+    Some(
+        -0.5 * quad
+            - 0.5 * logdet
+            - 0.5 * one_k_one.ln()
+            - 0.5 * (n as f64 - 1.0) * (2.0 * std::f64::consts::PI).ln(),
+    )
 }
 
 fn clamp_params(z: [f64; 3]) -> [f64; 3] {
@@ -214,11 +364,10 @@ pub fn fit_pilot_data(data: &PilotData) -> Result<FitResult> {
     // Starts: the data's variance for sf2, a spread of length scales relative to the
     // extent of the pilot locations, and a few noise levels.
     let var = data
-        .centred
-        .iter()
+        .centred()
         .map(|y| y.norm_squared() / y.len() as f64)
         .sum::<f64>()
-        / data.centred.len() as f64;
+        / data.centred().count() as f64;
     let extent = {
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in &data.points {
@@ -263,6 +412,7 @@ pub fn fit_pilot_data(data: &PilotData) -> Result<FitResult> {
         kernel,
         log_likelihood,
         aps_used: data.aps.clone(),
+        ap_rule: data.rule,
         locations: data.points.len(),
     })
 }
@@ -293,7 +443,8 @@ mod tests {
         let d = PilotData::from_fingerprints(&pilot).expect("data");
         assert_eq!(d.aps, vec!["a".to_string(), "b".to_string()]);
         // b is missing at two locations: -100 there, then centred on its mean of -85.
-        let b: Vec<f64> = d.centred[1].iter().copied().collect();
+        assert_eq!(d.rule, ApRule::HalfOfLocations);
+        let b: Vec<f64> = d.groups[0].centred[1].iter().copied().collect();
         assert_eq!(b, vec![25.0, -15.0, -15.0, 5.0]);
     }
 
@@ -311,7 +462,8 @@ mod tests {
             ),
             (
                 line(["a", "b", "c"]),
-                "no access point is heard at half or more of the 3 pilot locations",
+                "no access point is heard at half or more of the 3 pilot locations (3 access \
+                 points heard in all), nor at 4 or more of them (the most: 1)",
             ),
             (line(["a", "a", "a"]), "no spatial variation"),
         ];
@@ -359,6 +511,73 @@ mod tests {
         // The optimum is at least as likely as the truth (centring costs a little).
         let d = PilotData::from_fingerprints(&pilot).expect("data");
         assert!(fit.log_likelihood >= d.log_likelihood(&truth).expect("ll") - 1e-6);
+    }
+
+    /// A large floor: every access point is heard only on a stretch of a third or less of
+    /// the pilot locations, so SPEC 2's rule keeps none. The heard-only fit takes each on
+    /// its own stretch and still recovers the kernel the readings were drawn from (the
+    /// same 20% as above; each access point's few locations make it noisier, hence more
+    /// of them).
+    #[test]
+    fn on_a_large_floor_each_access_point_is_fitted_where_it_is_heard() {
+        use rand::RngExt;
+        let truth = Kernel::new(40.0, 6.0, 4.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let n = 90;
+        let pts: Vec<Point> = (0..n)
+            .map(|i| {
+                Point::new(
+                    i as f64 * 1.5 + rng.random_range(0.0..1.0),
+                    rng.random_range(0.0..6.0),
+                    0,
+                )
+            })
+            .collect();
+        let k = DMatrix::from_fn(n, n, |i, j| {
+            truth.k(&pts[i], &pts[j]) + if i == j { truth.sn2 } else { 0.0 }
+        });
+        let l = k.cholesky().expect("pd").unpack();
+        let mut pilot: Vec<Fingerprint> = pts.iter().map(|p| fp(p.x, p.y, &[])).collect();
+        let aps = 400;
+        let mut heard_at = Vec::new();
+        for a in 0..aps {
+            let z = DVector::from_iterator(n, (0..n).map(|_| standard_normal(&mut rng)));
+            let y = &l * z;
+            let len = rng.random_range(8..=n / 3);
+            let from = rng.random_range(0..=n - len);
+            for i in from..from + len {
+                pilot[i].rss.insert(format!("ap{a:03}"), -60.0 + y[i]);
+            }
+            heard_at.push(len);
+        }
+        // One more heard at only three locations: too few to enter.
+        for f in pilot.iter_mut().take(3) {
+            f.rss.insert("few".into(), -70.0);
+        }
+        let d = PilotData::from_fingerprints(&pilot).expect("data");
+        assert_eq!(d.rule, ApRule::HeardOnly);
+        assert_eq!(d.aps.len(), aps, "every access point but `few`");
+        assert!(!d.aps.contains(&"few".to_string()));
+        // Each group holds exactly the locations that hear its access point, centred.
+        for (g, &len) in d.groups.iter().zip(&heard_at) {
+            assert_eq!(g.points.len(), len);
+            assert!(g.centred[0].sum().abs() < 1e-9);
+        }
+        let fit = fit_kernel(&pilot).expect("fit");
+        assert_eq!(fit.ap_rule, ApRule::HeardOnly);
+        let rel = |a: f64, b: f64| (a - b).abs() / b;
+        assert!(rel(fit.kernel.sf2, truth.sf2) < 0.2, "{:?}", fit.kernel);
+        assert!(rel(fit.kernel.ell, truth.ell) < 0.2, "{:?}", fit.kernel);
+        assert!(rel(fit.kernel.sn2, truth.sn2) < 0.2, "{:?}", fit.kernel);
+        // SPEC 2's rule is still the one used whenever it keeps an access point.
+        for f in pilot.iter_mut().take(n / 2) {
+            f.rss.insert("wide".into(), -80.0 + f.x / 10.0);
+        }
+        let d = PilotData::from_fingerprints(&pilot).expect("data");
+        assert_eq!(
+            (d.rule, d.aps.clone()),
+            (ApRule::HalfOfLocations, vec!["wide".to_string()])
+        );
     }
 
     #[test]

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{BuildingRef, UPSERT_ACCESS_POINT, building_id, query_all, read_tx};
 use crate::gp::Kernel;
+use crate::gp::fit::ApRule;
 use crate::{Error, Result};
 
 /// A hyperparameter fit: the kernel, how well it fits, which access points it used, when.
@@ -13,9 +14,12 @@ pub struct FitRecord {
     pub kernel: Kernel,
     /// Sum over the access points used of the GP log marginal likelihood, nats.
     pub log_likelihood: f64,
-    /// Access points kept by the fit (heard at half the pilot locations or more), in the
-    /// fitter's order.
+    /// Access points kept by the fit, in the fitter's order.
     pub aps_used: Vec<String>,
+    /// How they were chosen: heard at half the pilot locations or more (SPEC 2), or, on a
+    /// floor where none is, each on the locations that hear it.
+    #[serde(default)]
+    pub ap_rule: ApRule,
     /// When the fit was made, ms since the Unix epoch.
     pub fitted_ms: i64,
 }
@@ -27,6 +31,7 @@ impl FitRecord {
             kernel: fit.kernel,
             log_likelihood: fit.log_likelihood,
             aps_used: fit.aps_used.clone(),
+            ap_rule: fit.ap_rule,
             fitted_ms,
         }
     }
@@ -68,6 +73,12 @@ pub(super) fn record(
         ],
     )?;
     let fit_id = tx.last_insert_rowid();
+    if fit.ap_rule == ApRule::HeardOnly {
+        tx.execute(
+            "INSERT INTO fit_rules (fit_id, ap_rule) VALUES (?1, 'heard_only')",
+            [fit_id],
+        )?;
+    }
     {
         // An access point first met in a fit joins the building's list.
         let mut ap = tx.prepare(UPSERT_ACCESS_POINT)?;
@@ -109,6 +120,22 @@ pub(super) fn latest(conn: &Connection, building: BuildingRef<'_>) -> Result<Opt
             [id],
             |r| r.get(0),
         )?;
+        let heard_only: Option<String> = conn
+            .query_row(
+                "SELECT ap_rule FROM fit_rules WHERE fit_id = ?1",
+                [id],
+                |r| r.get(0),
+            )
+            .optional()?;
+        let ap_rule = match heard_only.as_deref() {
+            None => ApRule::HalfOfLocations,
+            Some("heard_only") => ApRule::HeardOnly,
+            Some(other) => {
+                return Err(Error::InvalidRequest(format!(
+                    "fit {id}: unknown access-point rule {other:?} in fit_rules"
+                )));
+            }
+        };
         Ok(Some(StoredFit {
             id,
             building_id: bid,
@@ -116,6 +143,7 @@ pub(super) fn latest(conn: &Connection, building: BuildingRef<'_>) -> Result<Opt
                 kernel: Kernel::new(sf2, ell, sn2),
                 log_likelihood,
                 aps_used,
+                ap_rule,
                 fitted_ms,
             },
         }))

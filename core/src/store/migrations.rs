@@ -41,6 +41,11 @@ pub const MIGRATIONS: &[Migration] = &[
         name: "0003_floorplans",
         sql: include_str!("../../../schema/migrations/0003_floorplans.sql"),
     },
+    Migration {
+        version: 4,
+        name: "0004_fit_rules",
+        sql: include_str!("../../../schema/migrations/0004_fit_rules.sql"),
+    },
 ];
 
 /// The schema version this build writes: the number of the last migration.

@@ -45,6 +45,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "sn2": fit.kernel.sn2,
             "log_likelihood": fit.log_likelihood,
             "aps_used": fit.aps_used,
+            "ap_rule": fit.ap_rule,
             "locations": fit.locations,
             "fit_id": fit_id,
         });
@@ -60,6 +61,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             fit.aps_used.len(),
             fit.aps_used.join(", ")
         );
+        println!("ap_rule         {}", fit.ap_rule.describe());
         println!("locations       {}", fit.locations);
         match fit_id {
             Some(id) => println!("stored          as fit {id} of this building in the database"),
