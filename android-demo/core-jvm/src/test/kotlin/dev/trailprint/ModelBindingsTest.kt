@@ -10,6 +10,7 @@ import dev.trailprint.testing.TestData
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
+import kotlin.test.assertFalse
 import kotlin.test.assertTrue
 
 class ModelBindingsTest {
@@ -27,6 +28,8 @@ class ModelBindingsTest {
         assertTrue(fit.kernel.sn2 >= 1.0 && fit.kernel.ell in 0.5..1000.0, "${fit.kernel}")
         assertEquals(10u, fit.locations)
         assertTrue(fit.apsUsed.isNotEmpty())
+        // The demo building's access points are heard at half its pilot locations: SPEC 2's rule.
+        assertFalse(fit.heardOnly)
     }
 
     @Test
