@@ -94,3 +94,31 @@ fn generate_to_stdout_is_the_demo_with_default_options() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o) == trailprint::synth::DEMO_BUILDING_JSON);
 }
+
+#[test]
+fn generated_buildings_are_named_by_their_options_and_share_a_database() {
+    let (dir, db) = crate::store_common::temp_db();
+    let mut names = Vec::new();
+    for (file, opts) in [
+        ("a.json", "--rooms 2 --corridor-length 16"),
+        ("b.json", "--rooms 2 --corridor-length 16 --seed 3"),
+        (
+            "c.json",
+            "--floors 2 --rooms 2 --corridor-length 16 --aps 6",
+        ),
+    ] {
+        let path = dir.path().join(file);
+        let path = path.to_str().expect("utf-8 path");
+        let o = trailprint(&[&["generate", "--out", path][..], &words(opts)].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        // Every one imports beside the others: the name says what made it.
+        let out = crate::store_common::run_ok(&db, &["import", path]);
+        let name = format!("Synthetic building ({opts})");
+        assert!(out.contains(&format!("{name:?}")), "{out}");
+        names.push(name);
+    }
+    let listed = crate::store_common::run_ok(&db, &["buildings"]);
+    for n in &names {
+        assert!(listed.contains(n.as_str()), "{n} in {listed}");
+    }
+}

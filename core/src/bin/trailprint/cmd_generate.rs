@@ -38,7 +38,8 @@ pub struct Args {
     /// Spacing of the dense survey along edges, metres.
     #[arg(long)]
     dense_spacing: Option<f64>,
-    /// Building name.
+    /// Building name [default: the demo building's with the default options, else one
+    /// that lists the options, so that two generated buildings can share a database].
     #[arg(long)]
     name: Option<String>,
     /// Seed of every random choice.
@@ -48,8 +49,8 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let d = SynthParams::default();
-    let params = SynthParams {
-        name: args.name.unwrap_or(d.name),
+    let mut params = SynthParams {
+        name: args.name.clone().unwrap_or(d.name.clone()),
         floors: args.floors.unwrap_or(d.floors),
         corridor_length_m: args.corridor_length.unwrap_or(d.corridor_length_m),
         rooms_per_side: args.rooms.unwrap_or(d.rooms_per_side),
@@ -60,8 +61,11 @@ pub fn run(args: Args) -> Result<()> {
         test_points: args.test_points.unwrap_or(d.test_points),
         dense_spacing_m: args.dense_spacing.unwrap_or(d.dense_spacing_m),
         seed: args.seed.unwrap_or(d.seed),
-        ..d
+        ..d.clone()
     };
+    if args.name.is_none() && params != d {
+        params.name = described_name(&params);
+    }
     let synth = generate(&params)?;
     let text = to_json_text(&synth.file);
     if args.out.as_os_str() == "-" {
@@ -80,4 +84,53 @@ pub fn run(args: Args) -> Result<()> {
         synth.file.dense_survey.len()
     );
     Ok(())
+}
+
+/// The name of a generated building that is not the demo: the options it differs from
+/// the demo by, as typed (`Synthetic building (--rooms 40 --corridor-length 400)`), which
+/// also says how to generate it again; `trailprint import` refuses a second building of
+/// the same name.
+fn described_name(p: &SynthParams) -> String {
+    let d = SynthParams::default();
+    let mut opts: Vec<String> = Vec::new();
+    let mut opt = |flag: &str, v: String, dv: String| {
+        if v != dv {
+            opts.push(format!("--{flag} {v}"));
+        }
+    };
+    opt("floors", p.floors.to_string(), d.floors.to_string());
+    opt(
+        "rooms",
+        p.rooms_per_side.to_string(),
+        d.rooms_per_side.to_string(),
+    );
+    opt(
+        "corridor-length",
+        p.corridor_length_m.to_string(),
+        d.corridor_length_m.to_string(),
+    );
+    opt(
+        "room-depth",
+        p.room_depth_m.to_string(),
+        d.room_depth_m.to_string(),
+    );
+    opt(
+        "grid-spacing",
+        p.grid_spacing_m.to_string(),
+        d.grid_spacing_m.to_string(),
+    );
+    opt("aps", p.aps.to_string(), d.aps.to_string());
+    opt("pilot", p.pilot.to_string(), d.pilot.to_string());
+    opt(
+        "test-points",
+        p.test_points.to_string(),
+        d.test_points.to_string(),
+    );
+    opt(
+        "dense-spacing",
+        p.dense_spacing_m.to_string(),
+        d.dense_spacing_m.to_string(),
+    );
+    opt("seed", p.seed.to_string(), d.seed.to_string());
+    format!("Synthetic building ({})", opts.join(" "))
 }
