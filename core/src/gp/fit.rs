@@ -489,25 +489,18 @@ mod tests {
         let pts: Vec<Point> = (0..n)
             .map(|_| Point::new(rng.random_range(0.0..30.0), rng.random_range(0.0..20.0), 0))
             .collect();
-        let k = DMatrix::from_fn(n, n, |i, j| {
-            truth.k(&pts[i], &pts[j]) + if i == j { truth.sn2 } else { 0.0 }
-        });
-        let l = k.cholesky().expect("pd").unpack();
+        let draw = gp_draws(&truth, &pts);
         let aps = 150;
         let mut pilot: Vec<Fingerprint> = pts.iter().map(|p| fp(p.x, p.y, &[])).collect();
         for a in 0..aps {
-            let z = DVector::from_iterator(n, (0..n).map(|_| standard_normal(&mut rng)));
-            let y = &l * z;
+            let y = draw(&mut rng);
             for (i, f) in pilot.iter_mut().enumerate() {
                 f.rss.insert(format!("ap{a:03}"), -60.0 + y[i]);
             }
         }
         let fit = fit_kernel(&pilot).expect("fit");
-        let rel = |a: f64, b: f64| (a - b).abs() / b;
         assert_eq!(fit.aps_used.len(), aps);
-        assert!(rel(fit.kernel.sf2, truth.sf2) < 0.2, "{:?}", fit.kernel);
-        assert!(rel(fit.kernel.ell, truth.ell) < 0.2, "{:?}", fit.kernel);
-        assert!(rel(fit.kernel.sn2, truth.sn2) < 0.2, "{:?}", fit.kernel);
+        assert_within_a_fifth(&fit.kernel, &truth);
         // The optimum is at least as likely as the truth (centring costs a little).
         let d = PilotData::from_fingerprints(&pilot).expect("data");
         assert!(fit.log_likelihood >= d.log_likelihood(&truth).expect("ll") - 1e-6);
@@ -533,16 +526,12 @@ mod tests {
                 )
             })
             .collect();
-        let k = DMatrix::from_fn(n, n, |i, j| {
-            truth.k(&pts[i], &pts[j]) + if i == j { truth.sn2 } else { 0.0 }
-        });
-        let l = k.cholesky().expect("pd").unpack();
+        let draw = gp_draws(&truth, &pts);
         let mut pilot: Vec<Fingerprint> = pts.iter().map(|p| fp(p.x, p.y, &[])).collect();
         let aps = 400;
         let mut heard_at = Vec::new();
         for a in 0..aps {
-            let z = DVector::from_iterator(n, (0..n).map(|_| standard_normal(&mut rng)));
-            let y = &l * z;
+            let y = draw(&mut rng);
             let len = rng.random_range(8..=n / 3);
             let from = rng.random_range(0..=n - len);
             for i in from..from + len {
@@ -565,10 +554,7 @@ mod tests {
         }
         let fit = fit_kernel(&pilot).expect("fit");
         assert_eq!(fit.ap_rule, ApRule::HeardOnly);
-        let rel = |a: f64, b: f64| (a - b).abs() / b;
-        assert!(rel(fit.kernel.sf2, truth.sf2) < 0.2, "{:?}", fit.kernel);
-        assert!(rel(fit.kernel.ell, truth.ell) < 0.2, "{:?}", fit.kernel);
-        assert!(rel(fit.kernel.sn2, truth.sn2) < 0.2, "{:?}", fit.kernel);
+        assert_within_a_fifth(&fit.kernel, &truth);
         // SPEC 2's rule is still the one used whenever it keeps an access point.
         for f in pilot.iter_mut().take(n / 2) {
             f.rss.insert("wide".into(), -80.0 + f.x / 10.0);
@@ -596,6 +582,28 @@ mod tests {
             fit.kernel
         );
         assert!(fit.kernel.ell >= 0.5 && fit.kernel.ell <= 1000.0);
+    }
+
+    /// Every hyperparameter of `fit` within 20% of `truth`'s.
+    fn assert_within_a_fifth(fit: &Kernel, truth: &Kernel) {
+        let rel = |a: f64, b: f64| (a - b).abs() / b;
+        for (a, b) in [
+            (fit.sf2, truth.sf2),
+            (fit.ell, truth.ell),
+            (fit.sn2, truth.sn2),
+        ] {
+            assert!(rel(a, b) < 0.2, "{fit:?} against {truth:?}");
+        }
+    }
+
+    /// Draws of noisy readings at `pts` from a GP with kernel `truth` (zero mean).
+    fn gp_draws(truth: &Kernel, pts: &[Point]) -> impl Fn(&mut ChaCha8Rng) -> DVector<f64> {
+        let n = pts.len();
+        let k = DMatrix::from_fn(n, n, |i, j| {
+            truth.k(&pts[i], &pts[j]) + if i == j { truth.sn2 } else { 0.0 }
+        });
+        let l = k.cholesky().expect("pd").unpack();
+        move |rng| &l * DVector::from_iterator(n, (0..n).map(|_| standard_normal(rng)))
     }
 
     pub(crate) fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {

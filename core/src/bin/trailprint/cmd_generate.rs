@@ -92,45 +92,31 @@ pub fn run(args: Args) -> Result<()> {
 /// the same name.
 fn described_name(p: &SynthParams) -> String {
     let d = SynthParams::default();
-    let mut opts: Vec<String> = Vec::new();
-    let mut opt = |flag: &str, v: String, dv: String| {
-        if v != dv {
-            opts.push(format!("--{flag} {v}"));
-        }
-    };
-    opt("floors", p.floors.to_string(), d.floors.to_string());
-    opt(
-        "rooms",
-        p.rooms_per_side.to_string(),
-        d.rooms_per_side.to_string(),
-    );
-    opt(
-        "corridor-length",
-        p.corridor_length_m.to_string(),
-        d.corridor_length_m.to_string(),
-    );
-    opt(
-        "room-depth",
-        p.room_depth_m.to_string(),
-        d.room_depth_m.to_string(),
-    );
-    opt(
-        "grid-spacing",
-        p.grid_spacing_m.to_string(),
-        d.grid_spacing_m.to_string(),
-    );
-    opt("aps", p.aps.to_string(), d.aps.to_string());
-    opt("pilot", p.pilot.to_string(), d.pilot.to_string());
-    opt(
-        "test-points",
-        p.test_points.to_string(),
-        d.test_points.to_string(),
-    );
-    opt(
-        "dense-spacing",
-        p.dense_spacing_m.to_string(),
-        d.dense_spacing_m.to_string(),
-    );
-    opt("seed", p.seed.to_string(), d.seed.to_string());
-    format!("Synthetic building ({})", opts.join(" "))
+    let s = |v: &dyn std::fmt::Display| v.to_string();
+    let options = [
+        ("floors", s(&p.floors), s(&d.floors)),
+        ("rooms", s(&p.rooms_per_side), s(&d.rooms_per_side)),
+        (
+            "corridor-length",
+            s(&p.corridor_length_m),
+            s(&d.corridor_length_m),
+        ),
+        ("room-depth", s(&p.room_depth_m), s(&d.room_depth_m)),
+        ("grid-spacing", s(&p.grid_spacing_m), s(&d.grid_spacing_m)),
+        ("aps", s(&p.aps), s(&d.aps)),
+        ("pilot", s(&p.pilot), s(&d.pilot)),
+        ("test-points", s(&p.test_points), s(&d.test_points)),
+        (
+            "dense-spacing",
+            s(&p.dense_spacing_m),
+            s(&d.dense_spacing_m),
+        ),
+        ("seed", s(&p.seed), s(&d.seed)),
+    ];
+    let given: Vec<String> = options
+        .iter()
+        .filter(|(_, v, dv)| v != dv)
+        .map(|(flag, v, _)| format!("--{flag} {v}"))
+        .collect();
+    format!("Synthetic building ({})", given.join(" "))
 }
