@@ -144,25 +144,35 @@ impl Metric {
         let mut dist = vec![0.0f64; n * n];
         let mut next = vec![0u32; n * n];
         let adj = Adjacency::new(b);
+        // One group's columns, reused by every group (fresh ones per group cost page
+        // faults that two threads took turns on: the closure of the generated
+        // 3,161-vertex floor took 377 ms on two cores against 316 ms on one).
+        let mut col_d = vec![0.0f64; GROUP.min(n) * n];
+        let mut col_p = vec![0u32; GROUP.min(n) * n];
         let mut t0 = 0;
         while t0 < n {
             let t1 = (t0 + GROUP).min(n);
-            let cols: Vec<(Vec<f64>, Vec<u32>)> = (t0..t1)
-                .into_par_iter()
-                .map_init(BinaryHeap::new, |heap, t| {
-                    let mut d = vec![f64::INFINITY; n];
-                    let mut p = vec![u32::MAX; n];
-                    shortest_path_tree_into(&adj, t, &mut d, &mut p, heap);
-                    (d, p)
-                })
-                .collect();
-            for u in 0..n {
-                let row = u * n;
-                for (k, (d, p)) in cols.iter().enumerate() {
-                    dist[row + t0 + k] = d[u];
-                    next[row + t0 + k] = p[u];
-                }
-            }
+            let g = t1 - t0;
+            col_d[..g * n]
+                .par_chunks_mut(n)
+                .zip(col_p[..g * n].par_chunks_mut(n))
+                .enumerate()
+                .for_each_init(BinaryHeap::new, |heap, (k, (d, p))| {
+                    d.fill(f64::INFINITY);
+                    p.fill(u32::MAX);
+                    shortest_path_tree_into(&adj, t0 + k, d, p, heap);
+                });
+            // Row by row, in parallel too: each row takes `g` adjacent entries.
+            let (cd, cp) = (&col_d, &col_p);
+            dist.par_chunks_mut(n)
+                .zip(next.par_chunks_mut(n))
+                .enumerate()
+                .for_each(|(u, (dr, nr))| {
+                    for k in 0..g {
+                        dr[t0 + k] = cd[k * n + u];
+                        nr[t0 + k] = cp[k * n + u];
+                    }
+                });
             t0 = t1;
         }
         Metric { n, dist, next }
@@ -279,7 +289,13 @@ mod tests {
         use rand::{RngExt, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         for case in 0..60 {
-            let n = rng.random_range(2..40usize);
+            // Every tenth graph has more vertices than a group of columns (64), so the
+            // table is filled over several groups, the last one partial.
+            let n = if case % 10 == 9 {
+                rng.random_range(65..200usize)
+            } else {
+                rng.random_range(2..40usize)
+            };
             let vertices: Vec<String> = (0..n)
                 // Close together: every edge is longer than the straight line.
                 .map(|i| format!(r#"{{"id":"v{i}","x":{},"y":0}}"#, 0.001 * i as f64))

@@ -65,10 +65,10 @@ impl Problem {
     ) -> Result<Self> {
         // The two are independent: with more than one thread the metric's Dijkstras run
         // beside the engine's factorisation, which is one thread's work. The generated
-        // 3,161-vertex floor, least of 5 (`examples/problem_timing.rs`): 0.87-1.01 s one
-        // after the other on two cores, 0.69-0.72 s side by side. On one thread they run
-        // one after the other as before: under `rayon::join` there they took 0.91-1.02 s
-        // against 0.75-0.82 s.
+        // 3,161-vertex floor, least of 5 (`examples/problem_timing.rs`, an idle machine):
+        // 0.52-0.53 s one after the other on two cores, 0.34-0.36 s side by side; on one
+        // thread 0.68 s either way (there `rayon::join` was measured slower, on a busy
+        // machine, so one thread builds them one after the other).
         let build_engine = || UtilityEngine::new(building.clone(), kernel, model);
         let build_metric = || Arc::new(Metric::new(&building));
         let (engine, metric) = if rayon::current_num_threads() > 1 {
