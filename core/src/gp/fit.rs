@@ -566,6 +566,97 @@ mod tests {
         );
     }
 
+    /// Random pilot sets (3 to 30 locations, some at the same spot or on another floor,
+    /// 1 to 10 access points each heard at a random subset): the data is never a panic,
+    /// SPEC 2's rule is used exactly when an access point is heard at half the locations,
+    /// the heard-only rule's groups are the locations that hear each access point, and a
+    /// fit, when there is one, is finite and within the bounds.
+    #[test]
+    fn any_pilot_set_gets_the_rule_it_should_or_a_clear_error() {
+        use rand::RngExt;
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let (mut half, mut heard_only, mut refused) = (0, 0, 0);
+        for case in 0..300 {
+            let n = rng.random_range(3..=30usize);
+            let aps = rng.random_range(1..=10usize);
+            let mut pilot: Vec<Fingerprint> = (0..n)
+                .map(|_| {
+                    let mut f = fp(
+                        rng.random_range(0.0..200.0f64).round(),
+                        rng.random_range(0.0..20.0f64).round(),
+                        &[],
+                    );
+                    f.floor = rng.random_range(0..2);
+                    f
+                })
+                .collect();
+            let mut counts = vec![0usize; aps];
+            for (a, count) in counts.iter_mut().enumerate() {
+                let p_heard = rng.random_range(0.0..1.0f64).powi(2);
+                for f in pilot.iter_mut() {
+                    if rng.random_bool(p_heard) {
+                        f.rss
+                            .insert(format!("ap{a}"), rng.random_range(-100.0..-30.0));
+                        *count += 1;
+                    }
+                }
+            }
+            let spec = counts.iter().any(|&c| 2 * c >= n);
+            let usable = counts.iter().any(|&c| c >= HEARD_ONLY_MIN);
+            match PilotData::from_fingerprints(&pilot) {
+                Ok(d) => {
+                    let want = if spec {
+                        ApRule::HalfOfLocations
+                    } else {
+                        ApRule::HeardOnly
+                    };
+                    assert_eq!(d.rule, want, "case {case}: {counts:?} of {n}");
+                    let mut sorted = d.aps.clone();
+                    sorted.sort();
+                    assert_eq!(sorted, d.aps, "case {case}");
+                    if d.rule == ApRule::HeardOnly {
+                        heard_only += 1;
+                        assert_eq!(d.groups.len(), d.aps.len());
+                        for (g, ap) in d.groups.iter().zip(&d.aps) {
+                            let hears = pilot.iter().filter(|f| f.rss.contains_key(ap)).count();
+                            assert!(hears >= HEARD_ONLY_MIN && g.points.len() == hears);
+                        }
+                    } else {
+                        half += 1;
+                    }
+                    let ll = d.log_likelihood(&Kernel::new(50.0, 8.0, 4.0));
+                    assert!(ll.is_some_and(f64::is_finite), "case {case}: {ll:?}");
+                    if case % 10 == 0 {
+                        let fit = fit_pilot_data(&d).expect("a fit on usable data");
+                        let k = fit.kernel;
+                        assert!(fit.log_likelihood.is_finite(), "case {case}");
+                        assert!(
+                            k.sn2 >= SN2_BOUNDS.0 && k.ell >= ELL_BOUNDS.0 && k.ell <= ELL_BOUNDS.1
+                        );
+                    }
+                }
+                Err(e) => {
+                    refused += 1;
+                    let m = e.to_string();
+                    assert!(
+                        !usable || m.contains("no spatial variation"),
+                        "case {case}: {counts:?} of {n} refused: {m}"
+                    );
+                    assert!(
+                        m.contains("no access point is heard")
+                            || m.contains("no spatial variation"),
+                        "{m}"
+                    );
+                }
+            }
+        }
+        // Every branch was taken.
+        assert!(
+            half > 20 && heard_only > 20 && refused > 5,
+            "{half} {heard_only} {refused}"
+        );
+    }
+
     #[test]
     fn fit_respects_the_noise_floor() {
         // Noise-free smooth data would drive sn2 to 0; the fit stops at 1 dB².
