@@ -113,7 +113,27 @@ fn pilot_data_too_sparse_for_either_rule_is_refused_with_what_to_do() {
         "no access point is heard at half or more of the 25 pilot locations",
         "nor at 4 or more of them (the most: 2)",
         "give the kernel",
+        "--kernel SF2,ELL,SN2",
     ] {
         assert!(err.contains(want), "{want:?} in {err}");
     }
+    // `plan` on it says the same (the file has no kernel of its own).
+    let o = run(
+        &db,
+        &[
+            "plan",
+            "--building",
+            file.to_str().expect("utf-8"),
+            "--start",
+            "c00",
+            "--budget",
+            "40",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("nor at 4 or more") && err.contains("--kernel SF2,ELL,SN2"),
+        "{err}"
+    );
 }

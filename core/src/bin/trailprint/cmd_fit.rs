@@ -27,7 +27,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             b.name, b.name
         )));
     }
-    let fit = fit_kernel(&b.pilot)?;
+    let fit = fit_kernel(&b.pilot).map_err(|e| crate::opts::hint(e, &b))?;
     // A building of the database keeps its fit there (`trailprint buildings` counts it;
     // `demo` reuses the latest); a file has nowhere to keep it.
     let fit_id = if crate::store_cli::is_file_spec(&a.building.building) {

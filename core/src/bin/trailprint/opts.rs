@@ -63,9 +63,14 @@ impl KernelOpts {
     }
 }
 
-/// A fit error of a building without pilot data, with what to type to fix it.
+/// A fit error with what to type to fix it: for a building without pilot data, the
+/// option or the command that adds some; for pilot data that cannot be fitted (no
+/// access point heard at enough locations, no spatial variation), the option.
 pub fn hint(e: Error, b: &Building) -> Error {
     match e {
+        Error::Fit(m) if b.pilot.len() >= 3 => Error::Fit(format!(
+            "{m} (on the command line: --kernel SF2,ELL,SN2, for example --kernel 40,6,9)"
+        )),
         Error::Fit(_) if b.pilot.len() < 3 => Error::Fit(format!(
             "building {:?} has {} pilot fingerprint(s) and no kernel; give one with \
              --kernel SF2,ELL,SN2 (for example --kernel 40,6,9), or add pilot data (at \
