@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::store_common::{run, run_ok, temp_db};
+use crate::store_common::{run, run_ok, temp_db, words};
 use trailprint::gp::fit::ApRule;
 
 /// A 120 m corridor (61 vertices) with 25 pilot locations 5 m apart and 8 access points,
@@ -106,34 +106,25 @@ fn pilot_data_too_sparse_for_either_rule_is_refused_with_what_to_do() {
     let (dir, db) = temp_db();
     // Heard within 6 m: at 2 locations each.
     let file = long_corridor(dir.path(), 6.0);
-    let o = run(&db, &["fit", "--building", file.to_str().expect("utf-8")]);
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
-    for want in [
-        "no access point is heard at half or more of the 25 pilot locations",
-        "nor at 4 or more of them (the most: 2)",
-        "give the kernel",
-        "--kernel SF2,ELL,SN2",
-    ] {
-        assert!(err.contains(want), "{want:?} in {err}");
+    let path = file.to_str().expect("utf-8");
+    // `fit`, and `plan` on the file (it has no kernel of its own), both refuse with the
+    // cause and the option that does without a fit.
+    let plan = [
+        &["plan", "--building", path][..],
+        &words("--start c00 --budget 40"),
+    ]
+    .concat();
+    for args in [&["fit", "--building", path][..], &plan] {
+        let o = run(&db, args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        for want in [
+            "no access point is heard at half or more of the 25 pilot locations",
+            "nor at 4 or more of them (the most: 2)",
+            "give the kernel",
+            "--kernel SF2,ELL,SN2",
+        ] {
+            assert!(err.contains(want), "{args:?}: {want:?} in {err}");
+        }
     }
-    // `plan` on it says the same (the file has no kernel of its own).
-    let o = run(
-        &db,
-        &[
-            "plan",
-            "--building",
-            file.to_str().expect("utf-8"),
-            "--start",
-            "c00",
-            "--budget",
-            "40",
-        ],
-    );
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("nor at 4 or more") && err.contains("--kernel SF2,ELL,SN2"),
-        "{err}"
-    );
 }
