@@ -101,6 +101,15 @@ fn a_floor_where_no_access_point_is_heard_at_half_the_pilot_locations_is_fitted_
     );
 }
 
+/// What the refusal of the 6 m corridor's pilot data says: the cause, the counts, and the
+/// way around it.
+const REFUSAL: [&str; 4] = [
+    "no access point is heard at half or more of the 25 pilot locations",
+    "nor at 4 or more of them (the most: 2)",
+    "give the kernel",
+    "--kernel SF2,ELL,SN2",
+];
+
 #[test]
 fn pilot_data_too_sparse_for_either_rule_is_refused_with_what_to_do() {
     let (dir, db) = temp_db();
@@ -118,12 +127,7 @@ fn pilot_data_too_sparse_for_either_rule_is_refused_with_what_to_do() {
         let o = run(&db, args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
         let err = String::from_utf8_lossy(&o.stderr);
-        for want in [
-            "no access point is heard at half or more of the 25 pilot locations",
-            "nor at 4 or more of them (the most: 2)",
-            "give the kernel",
-            "--kernel SF2,ELL,SN2",
-        ] {
+        for want in REFUSAL {
             assert!(err.contains(want), "{args:?}: {want:?} in {err}");
         }
     }
