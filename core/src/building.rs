@@ -15,6 +15,9 @@ use serde::{Deserialize, Serialize};
 use crate::gp::{Kernel, Point};
 use crate::{Error, Result};
 
+mod part;
+pub use part::{EVALUATION_MARGIN_M, PartSpec};
+
 /// The only format version this code reads and writes.
 pub const FORMAT: &str = "survey-building/1";
 

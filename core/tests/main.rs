@@ -13,6 +13,7 @@ mod plan_common;
 mod store_common;
 
 mod cli_fit;
+mod cli_part;
 mod cli_pipe;
 mod cli_store;
 mod cli_surveyor;

@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::plan_common::building_json;
+use crate::plan_common::line_json as line_of;
 use trailprint::Error;
 use trailprint::building::Building;
 use trailprint::gp::{Kernel, fit_kernel};
@@ -37,15 +37,9 @@ fn generated(params: SynthParams) -> (Arc<Building>, Kernel) {
     (b, k)
 }
 
-/// A line of `n` vertices 1 m apart, as a `survey-building/1` file's text.
+/// A line of `n` vertices 1 m apart with one pilot point, as a file's text.
 fn line_json(n: usize) -> String {
-    let v: Vec<String> = (0..n)
-        .map(|i| format!(r#"{{"id":"v{i}","x":{i},"y":0}}"#))
-        .collect();
-    let e: Vec<String> = (1..n)
-        .map(|i| format!(r#"{{"a":"v{}","b":"v{i}"}}"#, i - 1))
-        .collect();
-    building_json("line", &v, &e, r#"[{"x":0,"y":0,"rss":{"a":-50}}]"#)
+    line_of(n, r#"[{"x":0,"y":0,"rss":{"a":-50}}]"#)
 }
 
 fn line(n: usize) -> Arc<Building> {

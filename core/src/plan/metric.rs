@@ -57,11 +57,25 @@ fn unitem(i: Item) -> (f64, usize) {
 /// every run and machine. The one shortest-path search of the crate: the metric closure
 /// and the session's replanning both use it.
 pub fn shortest_path_tree(b: &Building, root: usize) -> (Vec<f64>, Vec<u32>) {
+    shortest_path_tree_within(b, root, &|_| true)
+}
+
+/// [`shortest_path_tree`] through the vertices `keep` accepts only, as if the others and
+/// their edges were not there (they stay at `INFINITY` and `u32::MAX`; so does everything
+/// when `keep` refuses `root`). A part of a building (`Building::part`) keeps what is
+/// within walking distance of a vertex on the floors it keeps.
+pub fn shortest_path_tree_within(
+    b: &Building,
+    root: usize,
+    keep: &dyn Fn(usize) -> bool,
+) -> (Vec<f64>, Vec<u32>) {
     let n = b.len();
     let mut d = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
-    let adj = Adjacency::new(b);
-    shortest_path_tree_into(&adj, root, &mut d, &mut parent, &mut BinaryHeap::new());
+    if keep(root) {
+        let adj = Adjacency::within(b, keep);
+        shortest_path_tree_into(&adj, root, &mut d, &mut parent, &mut BinaryHeap::new());
+    }
     (d, parent)
 }
 
@@ -78,15 +92,24 @@ struct Adjacency {
 
 impl Adjacency {
     fn new(b: &Building) -> Self {
+        Self::within(b, &|_| true)
+    }
+
+    /// The edges between two vertices `keep` accepts only.
+    fn within(b: &Building, keep: &dyn Fn(usize) -> bool) -> Self {
         let n = b.len();
         let mut start = Vec::with_capacity(n + 1);
         let mut to = Vec::new();
         let mut len = Vec::new();
         start.push(0);
         for v in 0..n {
-            for &(w, e) in b.neighbours(v) {
-                to.push(w as u32);
-                len.push(b.edges[e].length);
+            if keep(v) {
+                for &(w, e) in b.neighbours(v) {
+                    if keep(w) {
+                        to.push(w as u32);
+                        len.push(b.edges[e].length);
+                    }
+                }
             }
             start.push(to.len());
         }

@@ -448,16 +448,27 @@ fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<
         "planning on {:?} ({} vertices, budget {} m) needs about {} MiB, more than the memory \
          budget of {} MiB: the vertex covariance and the shortest-path table grow with the \
          square of the vertex count and a walk's matrix with its samples; plan one floor or \
-         part of the building, use a shorter budget or a sparser sample interval, or raise \
-         the memory budget (--memory-budget MIB, PlanRequest.memory_budget) if the device has \
-         {} MiB to spare",
+         part of the building ({}), use a shorter budget or a sparser sample interval, or \
+         raise the memory budget (--memory-budget MIB, PlanRequest.memory_budget) if the \
+         device has {} MiB to spare",
         building.name,
         building.len(),
         req.budget,
         mib(need),
         mib(req.settings.memory_budget),
+        part_hint(&req.start, req.budget),
         mib(need)
     )))
+}
+
+/// How to cut out a part of a building to plan instead (`Building::part`), for the
+/// messages of a request refused for its size: every vertex a walk from `start` within
+/// `budget` metres can reach lies within `budget` of `start`.
+pub(crate) fn part_hint(start: &str, budget: f64) -> String {
+    format!(
+        "`trailprint export BUILDING --floor ID -o part.json` writes one floor; \
+         `--around {start} --radius {budget}` keeps every vertex this walk can reach"
+    )
 }
 
 /// Checks an outcome and dresses it as a result.

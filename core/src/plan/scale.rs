@@ -343,7 +343,7 @@ fn refuse_if_too_slow(
              the budget ({samples} samples) is one dense factorisation, about {:.1} s here, \
              which grows with the cube of the samples; raise the time limit (--time-limit, \
              PlanRequest.time_limit) to {:.0} s or more{smaller} (or plan one floor or part \
-             of the building)",
+             of the building: {})",
             p.building.name,
             p.building.len(),
             p.budget,
@@ -353,6 +353,7 @@ fn refuse_if_too_slow(
             // Half as much again as the estimate, so that a busier moment does not refuse
             // the retry, and the limit itself for the search.
             (needed.mul_f64(1.5) + limit).as_secs_f64().ceil(),
+            super::part_hint(&p.building.vertices[p.start].id, p.budget),
         ),
     })
 }

@@ -28,6 +28,18 @@ pub fn building_json(name: &str, vertices: &[String], edges: &[String], pilot: &
     )
 }
 
+/// A line named "line" of `n` vertices 1 m apart (`v0`, `v1`, ...) with the pilot data
+/// `pilot` (a JSON array), as a `survey-building/1` file's text.
+pub fn line_json(n: usize, pilot: &str) -> String {
+    let v: Vec<String> = (0..n)
+        .map(|i| format!(r#"{{"id":"v{i}","x":{i},"y":0}}"#))
+        .collect();
+    let e: Vec<String> = (1..n)
+        .map(|i| format!(r#"{{"a":"v{}","b":"v{i}"}}"#, i - 1))
+        .collect();
+    building_json("line", &v, &e, pilot)
+}
+
 /// A `w x h` grid with `step` m edges, minus the edges in `drop` (by index in row-major
 /// edge order, skipped if that would disconnect the grid), with a few pilot points.
 pub fn grid(w: usize, h: usize, step: f64, drop: &[usize]) -> Arc<Building> {

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use trailprint::building::PartSpec;
 use trailprint::radiomap::{
     SessionPeople, jsonl, radio_map, radio_map_csv, radio_map_geojson, scan_rows, uji_csv,
     walkable_grid,
@@ -56,6 +57,26 @@ pub struct Args {
     /// With --radio-map: grid spacing, metres
     #[arg(long, default_value_t = 1.0, value_name = "M", requires = "radio_map")]
     grid: f64,
+    /// Export only this floor of the building (repeat for several): a part to plan when the
+    /// whole building needs more memory than the device has
+    #[arg(long = "floor", value_name = "ID", conflicts_with_all = ["collected", "fingerprints", "radio_map"])]
+    floors: Vec<i64>,
+    /// Export only the vertices within --radius metres' walk of this vertex (on the floors
+    /// kept)
+    #[arg(long, value_name = "VERTEX", requires = "radius", conflicts_with_all = ["collected", "fingerprints", "radio_map"])]
+    around: Option<String>,
+    /// With --around: the walking distance, metres
+    #[arg(
+        long,
+        value_name = "M",
+        requires = "around",
+        allow_negative_numbers = true
+    )]
+    radius: Option<f64>,
+    /// With --floor or --around: the part's name [default: the building's, followed by
+    /// what was kept]
+    #[arg(long, value_name = "NAME")]
+    part_name: Option<String>,
     #[command(flatten)]
     kernel: KernelOpts,
 }
@@ -77,6 +98,14 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
     }
     if args.fingerprints || args.radio_map {
         return scans(args, db);
+    }
+    if !args.floors.is_empty() || args.around.is_some() {
+        return part(args, db);
+    }
+    if args.part_name.is_some() {
+        return Err(trailprint::Error::InvalidRequest(
+            "--part-name goes with --floor or --around".into(),
+        ));
     }
     if args.collected.is_none() && is_file_spec(&args.name) {
         let mut text = load_building(&args.name, db)?.to_file().to_json();
@@ -101,6 +130,31 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
         }
     };
     write_output(&args.output, &text)
+}
+
+/// `--floor` and `--around`: a part of the building as a building file of its own
+/// ([`Building::part`]).
+fn part(args: &Args, db: Option<&Path>) -> Result<()> {
+    let building = load_building(&args.name, db)?;
+    let spec = PartSpec {
+        floors: args.floors.clone(),
+        around: args.around.clone().zip(args.radius),
+        name: args.part_name.clone(),
+    };
+    let part = building.part(&spec)?;
+    let mut text = part.to_file().to_json();
+    text.push('\n');
+    write_output(&args.output, &text)?;
+    eprintln!(
+        "{:?}: {} of {} vertices, {:.0} of {:.0} m of edges, {} pilot points",
+        part.name,
+        part.len(),
+        building.len(),
+        part.total_edge_length(),
+        building.total_edge_length(),
+        part.pilot.len()
+    );
+    Ok(())
 }
 
 /// `--fingerprints` and `--radio-map`: the building's scans, from a file (its pilot data)
