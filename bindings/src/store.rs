@@ -3,6 +3,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use trailprint::building::PartSpec;
 use trailprint::store::{self, BuildingInfo, ImportOptions, Store};
 
 use crate::Result;
@@ -178,6 +179,44 @@ impl TrailprintStore {
     pub fn import_building_file(&self, path: String, replace: bool) -> Result<BuildingSummary> {
         let text = store::read_import_text(Path::new(&path))?;
         self.import_building_json(text, path, replace)
+    }
+
+    /// Imports a part of a stored building as a building of its own: the floors in
+    /// `floors` (all when empty) and, with `around` and `radius_m`, only what lies within
+    /// that walking distance of the vertex `around`. A building refused for memory or time
+    /// is planned by parts: every vertex a walk from `start` within a budget of `B` metres
+    /// can reach lies within `B` of `start`. `name`: the part's (default: the building's
+    /// followed by what was kept). A building of the same name is replaced when `replace`.
+    pub fn import_building_part(
+        &self,
+        building_id: i64,
+        floors: Vec<i64>,
+        around: Option<String>,
+        radius_m: Option<f64>,
+        name: Option<String>,
+        replace: bool,
+    ) -> Result<BuildingSummary> {
+        let around = match (around, radius_m) {
+            (Some(v), Some(r)) => Some((v, r)),
+            (None, None) => None,
+            _ => {
+                return Err(trailprint::Error::InvalidRequest(
+                    "a part around a vertex needs both the vertex and the radius".into(),
+                )
+                .into());
+            }
+        };
+        let spec = PartSpec {
+            floors,
+            around,
+            name,
+        };
+        let opts = ImportOptions {
+            replace,
+            ..Default::default()
+        };
+        let report = self.inner.import_part(building_id, &spec, &opts)?;
+        Ok(self.inner.building_info(report.id)?.into())
     }
 
     /// Every building, by name.

@@ -214,6 +214,21 @@ impl Store {
         self.import_building(&building, Some(origin), options)
     }
 
+    /// Imports a part of a stored building (some floors, or what lies within a walking
+    /// distance of a vertex: [`Building::part`]) as a building of its own, for a building
+    /// too large to plan on the device. Its source names the building it was cut from.
+    pub fn import_part<'a>(
+        &self,
+        building: impl Into<BuildingRef<'a>>,
+        spec: &crate::building::PartSpec,
+        options: &ImportOptions<'_>,
+    ) -> Result<ImportReport> {
+        let whole = self.get_building(building)?;
+        let part = whole.part(spec)?;
+        let source = format!("part of {:?}", whole.name);
+        self.import_building(&part, Some(&source), options)
+    }
+
     /// Every building with its counts, by name.
     pub fn list_buildings(&self) -> Result<Vec<BuildingInfo>> {
         buildings::list(&self.lock(), None)
