@@ -715,3 +715,42 @@ fn store_is_shareable_across_threads() {
     send_sync::<Store>();
     send::<trailprint::store::Reader>();
 }
+
+#[test]
+fn the_same_part_asked_for_twice_is_one_building() {
+    use trailprint::building::PartSpec;
+    let store = Store::open_in_memory().expect("open");
+    let whole = import(&store, &shared_instance("area-two.json"));
+    let first_vertex = store.get_building(whole).expect("get").vertices[0]
+        .id
+        .clone();
+    let spec = PartSpec {
+        around: Some((first_vertex, 12.0)),
+        ..PartSpec::default()
+    };
+    let opts = ImportOptions::default();
+    let a = store.import_part(whole, &spec, &opts).expect("part");
+    assert!(a.rows > 0);
+    let info = store.building_info(a.id).expect("info");
+    assert_eq!(
+        info.source.as_deref(),
+        Some("part of \"Area Two (synthetic)\"")
+    );
+    // Again: the same building, nothing written.
+    let b = store
+        .import_part(whole, &spec, &opts)
+        .expect("the same part");
+    assert_eq!((b.id, b.rows), (a.id, 0));
+    assert_eq!(store.list_buildings().expect("list").len(), 2);
+    // Another part under that name is refused as any import of a taken name is.
+    let wider = PartSpec {
+        name: Some(a.name.clone()),
+        around: spec.around.clone().map(|(v, r)| (v, 2.0 * r)),
+        ..PartSpec::default()
+    };
+    let e = store
+        .import_part(whole, &wider, &opts)
+        .expect_err("name taken");
+    assert!(matches!(e, Error::AlreadyExists(_)), "{e}");
+    assert_eq!(store.list_buildings().expect("list").len(), 2);
+}

@@ -217,6 +217,8 @@ impl Store {
     /// Imports a part of a stored building (some floors, or what lies within a walking
     /// distance of a vertex: [`Building::part`]) as a building of its own, for a building
     /// too large to plan on the device. Its source names the building it was cut from.
+    /// The same part asked for again is the building already imported (`rows` 0), unless
+    /// `options.replace`; another building of its name is an error, as for any import.
     pub fn import_part<'a>(
         &self,
         building: impl Into<BuildingRef<'a>>,
@@ -226,7 +228,18 @@ impl Store {
         let whole = self.get_building(building)?;
         let part = whole.part(spec)?;
         let source = format!("part of {:?}", whole.name);
-        self.import_building(&part, Some(&source), options)
+        match self.import_building(&part, Some(&source), options) {
+            Err(crate::Error::AlreadyExists(m)) => match self.get_building(part.name.as_str()) {
+                Ok(there) if there.to_file() == part.to_file() => Ok(ImportReport {
+                    id: self.building_info(part.name.as_str())?.id,
+                    name: part.name,
+                    replaced: None,
+                    rows: 0,
+                }),
+                _ => Err(crate::Error::AlreadyExists(m)),
+            },
+            other => other,
+        }
     }
 
     /// Every building with its counts, by name.

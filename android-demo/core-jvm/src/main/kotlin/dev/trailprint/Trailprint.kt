@@ -61,6 +61,20 @@ class Trailprint(
     suspend fun importBuildingFile(path: String, replace: Boolean = false): BuildingSummary =
         withContext(io) { store.importBuildingFile(path, replace) }
 
+    /**
+     * Imports a part of building [buildingId] as a building of its own: the [floors] (all
+     * when empty) and, with [around] and [radiusM], what lies within that walk of the vertex.
+     * A building refused for memory is planned by parts ([dev.trailprint.ui.PlanModel.planSuggestedPart]).
+     */
+    suspend fun importBuildingPart(
+        buildingId: Long,
+        floors: List<Long> = emptyList(),
+        around: String? = null,
+        radiusM: Double? = null,
+        name: String? = null,
+        replace: Boolean = false,
+    ): BuildingSummary = withContext(io) { store.importBuildingPart(buildingId, floors, around, radiusM, name, replace) }
+
     suspend fun buildings(): List<BuildingSummary> = withContext(io) { store.listBuildings() }
 
     suspend fun map(buildingId: Long): BuildingMap = withContext(io) { store.buildingMap(buildingId) }

@@ -5,10 +5,17 @@ import dev.trailprint.ffi.PlanRequest
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.defaultRobotProfile
+import dev.trailprint.ui.PartSuggestion
+import dev.trailprint.ui.PlanModel
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
+import kotlin.test.assertNull
 import kotlin.test.assertTrue
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.flow.first
+import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 
 /** A building too large for the phone's memory is planned by parts, as the refusal says. */
 class BuildingPartTest {
@@ -41,6 +48,31 @@ class BuildingPartTest {
             val plan = store.newPlan(request(part.id)).use { it.run(null) }
             assertTrue(plan.lengthM > 0.95 * 60.0 && plan.lengthM <= 60.0 + 1e-9, "${plan.lengthM}")
             assertTrue(plan.utilityNats > 0.0)
+        }
+    }
+
+    @Test
+    fun thePlanScreenOffersThePartARefusalNamesAndImportsItOnce() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            // 8,000 vertices: the shortest-path table alone is 768 MB, over the 512 MiB default.
+            val bid = api.importBuilding(corridor(8000), "corridor.json").id
+            val model = PlanModel(api, this, bid)
+            model.load().join()
+            model.tapVertex("v0")
+            model.tapVertex("v0")
+            model.setBudget(60.0)
+            model.plan()
+            val refused = withTimeout(60_000) { model.state.first { !it.planning && it.error != null } }
+            assertEquals(PartSuggestion("v0", 60.0), refused.suggestedPart, refused.error)
+            model.planSuggestedPart()
+            val opened = withTimeout(60_000) { model.state.first { it.partBuilding != null || it.error != null } }
+            assertNull(opened.error)
+            assertNull(opened.suggestedPart)
+            val part = opened.partBuilding!!
+            assertEquals(61uL, part.vertices)
+            // The same part again (the refusal seen a second time): the building imported before.
+            assertEquals(part.id, api.importBuildingPart(bid, around = "v0", radiusM = 60.0).id)
+            assertEquals(2, api.buildings().size)
         }
     }
 

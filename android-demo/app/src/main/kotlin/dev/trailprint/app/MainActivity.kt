@@ -144,6 +144,7 @@ private fun AppNavigation(jump: MutableStateFlow<String?>) {
         "plan" -> PlanScreen(
             buildingId = parts[1].toLong(),
             onStartSurvey = { planId, robot -> route = Routes.survey(planId, robot) },
+            onOpenBuilding = { id -> route = Routes.plan(id) },
         )
         "survey" -> SurveyScreen(
             planId = parts[1].toLongOrNull(),

@@ -4,6 +4,7 @@ import dev.trailprint.PlanEvent
 import dev.trailprint.RunningPlan
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.BuildingMap
+import dev.trailprint.ffi.BuildingSummary
 import dev.trailprint.ffi.PlanAlgorithm
 import dev.trailprint.ffi.PlanProgress
 import dev.trailprint.ffi.PlanRequest
@@ -24,6 +25,9 @@ import kotlinx.coroutines.launch
 enum class BudgetUnit { METRES, MINUTES }
 
 enum class Profile { HUMAN, ROBOT }
+
+/** A part of a building to plan instead of the whole: what lies within [radiusM] of [around]. */
+data class PartSuggestion(val around: String, val radiusM: Double)
 
 /** The plan screen. */
 data class PlanState(
@@ -46,6 +50,14 @@ data class PlanState(
      * "plan with this much time" ([PlanModel.planWithSuggestedTime]).
      */
     val suggestedTimeLimitS: Double? = null,
+    /**
+     * After a plan refused because the building needs more memory than the phone allows:
+     * the part the planner says holds every vertex the walk can reach. The screen offers
+     * "plan this part" ([PlanModel.planSuggestedPart]).
+     */
+    val suggestedPart: PartSuggestion? = null,
+    /** The part imported by [PlanModel.planSuggestedPart]: the screen opens its plan. */
+    val partBuilding: BuildingSummary? = null,
 ) {
     val surveyor: SurveyorProfile get() = if (profile == Profile.HUMAN) human else robot
 
@@ -59,6 +71,14 @@ data class PlanState(
 
     companion object {
         const val ROBOT_SPEED_MPS = 0.5
+
+        private val SUGGESTED_PART = Regex("""--around (\S+) --radius ([0-9]+(?:\.[0-9]+)?)""")
+
+        /** The part that a refusal's [message] names (`--around V --radius M`), if any. */
+        fun suggestedPart(message: String?): PartSuggestion? =
+            message?.let { SUGGESTED_PART.find(it) }?.let { m ->
+                m.groupValues[2].toDoubleOrNull()?.let { PartSuggestion(m.groupValues[1], it) }
+            }
 
         private val SUGGESTED_LIMIT = Regex("""raise the time limit \([^)]*\) to ([0-9]+(?:\.[0-9]+)?) s or more""")
 
@@ -129,7 +149,9 @@ class PlanModel(
         val s = _state.value
         if (!s.canPlan) return
         val request = PlanRequest(buildingId, s.start!!, s.end!!, s.budgetMetres, s.surveyor, s.algorithm, seed, timeLimitS)
-        _state.update { it.copy(planning = true, progress = null, result = null, error = null, suggestedTimeLimitS = null) }
+        _state.update {
+            it.copy(planning = true, progress = null, result = null, error = null, suggestedTimeLimitS = null, suggestedPart = null)
+        }
         val running = api.startPlan(request)
         runningPlan = running
         planJob = scope.launch {
@@ -144,6 +166,8 @@ class PlanModel(
                 // The user cancelled: nothing to show.
             } catch (e: TrailprintException.TimeLimitTooShort) {
                 _state.update { it.copy(error = e.message, suggestedTimeLimitS = PlanState.suggestedTimeLimit(e.message)) }
+            } catch (e: TrailprintException.InvalidRequest) {
+                _state.update { it.copy(error = e.message, suggestedPart = PlanState.suggestedPart(e.message)) }
             } catch (e: TrailprintException) {
                 _state.update { it.copy(error = e.message) }
             } catch (e: CancellationException) {
@@ -163,5 +187,23 @@ class PlanModel(
         runningPlan?.stop()
     }
 
-    fun dismissError() = _state.update { it.copy(error = null, suggestedTimeLimitS = null) }
+    /**
+     * Imports the part the last refusal named (the building imported before when the same
+     * part was asked for already) and puts it in [PlanState.partBuilding], for the screen to open its
+     * plan. Nothing when there is no suggestion.
+     */
+    fun planSuggestedPart() {
+        val part = _state.value.suggestedPart ?: return
+        _state.update { it.copy(error = null, suggestedPart = null) }
+        scope.launch {
+            try {
+                val b = api.importBuildingPart(buildingId, around = part.around, radiusM = part.radiusM)
+                _state.update { it.copy(partBuilding = b) }
+            } catch (e: TrailprintException) {
+                _state.update { it.copy(error = e.message) }
+            }
+        }
+    }
+
+    fun dismissError() = _state.update { it.copy(error = null, suggestedTimeLimitS = null, suggestedPart = null) }
 }

@@ -16,6 +16,7 @@ import androidx.compose.material3.OutlinedTextField
 import androidx.compose.material3.Text
 import androidx.compose.material3.TextButton
 import androidx.compose.runtime.Composable
+import androidx.compose.runtime.LaunchedEffect
 import androidx.compose.runtime.getValue
 import androidx.compose.runtime.mutableStateOf
 import androidx.compose.runtime.remember
@@ -55,10 +56,13 @@ class PlanViewModel(app: Application, buildingId: Long) : AndroidViewModel(app) 
 fun PlanScreen(
     buildingId: Long,
     onStartSurvey: (planId: Long, robot: Boolean) -> Unit,
+    onOpenBuilding: (buildingId: Long) -> Unit,
     vm: PlanViewModel = viewModel(key = "plan-$buildingId", factory = PlanViewModel.factory(buildingId)),
 ) {
     val s by vm.model.state.collectAsStateWithLifecycle()
     val m = vm.model
+    // A part imported after a refusal for memory: plan on it.
+    LaunchedEffect(s.partBuilding) { s.partBuilding?.let { onOpenBuilding(it.id) } }
     Column(Modifier.fillMaxSize().padding(12.dp), verticalArrangement = Arrangement.spacedBy(8.dp)) {
         Text(s.map?.name ?: "Loading…", style = androidx.compose.material3.MaterialTheme.typography.titleLarge)
         Text("Start: ${s.start ?: "tap a vertex"}   End: ${s.end ?: "tap a vertex"}")
@@ -124,13 +128,16 @@ fun PlanScreen(
             onDismissRequest = m::dismissError,
             confirmButton = {
                 val more = s.suggestedTimeLimitS
+                val part = s.suggestedPart
                 if (more != null) {
                     TextButton(onClick = m::planWithSuggestedTime) { Text("Plan with %.0f s".format(more)) }
+                } else if (part != null) {
+                    TextButton(onClick = m::planSuggestedPart) { Text("Plan the part within %.0f m".format(part.radiusM)) }
                 } else {
                     TextButton(onClick = m::dismissError) { Text("OK") }
                 }
             },
-            dismissButton = if (s.suggestedTimeLimitS != null) {
+            dismissButton = if (s.suggestedTimeLimitS != null || s.suggestedPart != null) {
                 { TextButton(onClick = m::dismissError) { Text("Cancel") } }
             } else null,
             title = { Text("Cannot plan") },
