@@ -48,17 +48,18 @@ fn a_building_refused_for_its_size_is_planned_on_the_part_the_refusal_names() {
         .split('`')
         .find(|s| s.starts_with("--around"))
         .unwrap_or_else(|| panic!("no --around hint in: {err}"));
-    assert_eq!(hint, "--around v0 --radius 60");
+    // A round trip of 60 m reaches 30 m from v0; two length scales (6 m) more.
+    assert_eq!(hint, "--around v0 --radius 42");
     let part = dir.path().join("part.json");
     let part_s = part.to_str().expect("utf-8");
     let export = [&["export", "Long corridor", "-o", part_s][..], &words(hint)].concat();
     let o = run(&db, &export);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(summary.contains("61 of 3000 vertices"), "{summary}");
+    assert!(summary.contains("43 of 3000 vertices"), "{summary}");
     let b = trailprint::Building::load(&part).expect("the part is a valid building");
-    assert_eq!(b.name, "Long corridor (within 60 m of v0)");
-    assert_eq!(b.len(), 61);
+    assert_eq!(b.name, "Long corridor (within 42 m of v0)");
+    assert_eq!(b.len(), 43);
     // Every pilot point of the floor is kept (the kernel's data), the kernel too.
     assert_eq!(b.pilot.len(), 60);
     assert!(b.kernel.is_some());
@@ -71,6 +72,15 @@ fn a_building_refused_for_its_size_is_planned_on_the_part_the_refusal_names() {
     let length = v["length_m"].as_f64().expect("length");
     assert!(length > 0.95 * 60.0 && length <= 60.0 + 1e-9, "{v}");
     assert!(v["utility_nats"].as_f64().is_some_and(|u| u > 0.0), "{v}");
+
+    // From v0 to v20 within 60 m: nothing beyond (60 + 20) / 2 = 40 m is reachable.
+    let to_v20 = words("--start v0 --end v20 --budget 60 --memory-budget 64");
+    let o = run(
+        &db,
+        &[&["plan", "--building", "Long corridor"][..], &to_v20].concat(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(err.contains("`--around v0 --radius 52`"), "{err}");
 }
 
 #[test]

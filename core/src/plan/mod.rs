@@ -201,7 +201,7 @@ pub fn plan_with_prior(
     // fitting the kernel): set-up (shortest paths, the engine) counts against the limit.
     let started = control.clock_start();
     let (start, end) = validate(&building, req)?;
-    let threads = check_memory(&building, req, prior.len())?;
+    let threads = check_memory(&building, req, (start, end), prior.len())?;
     if threads < rayon::current_num_threads() {
         // Fewer threads evaluate fewer walks at once: a device with many cores plans
         // what one core could within the memory budget, rather than refusing it.
@@ -434,7 +434,12 @@ fn estimate_memory_with(
 /// the current pool's where they fit, else fewer. Refuses the request when even one
 /// thread does not fit. (On eight threads the 565-vertex mall, robot 2,036 m, was
 /// refused at 1,359 MiB; one thread plans it in 190 MiB.)
-fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<usize> {
+fn check_memory(
+    building: &Building,
+    req: &PlanRequest,
+    (start, end): (usize, usize),
+    prior: usize,
+) -> Result<usize> {
     let threads = rayon::current_num_threads().max(1);
     if let Some(k) = (1..=threads)
         .rev()
@@ -456,18 +461,26 @@ fn check_memory(building: &Building, req: &PlanRequest, prior: usize) -> Result<
         req.budget,
         mib(need),
         mib(req.settings.memory_budget),
-        part_hint(&req.start, req.budget),
+        part_hint(building, start, end, req.budget, req.kernel.ell),
         mib(need)
     )))
 }
 
 /// How to cut out a part of a building to plan instead (`Building::part`), for the
-/// messages of a request refused for its size: every vertex a walk from `start` within
-/// `budget` metres can reach lies within `budget` of `start`.
-pub(crate) fn part_hint(start: &str, budget: f64) -> String {
+/// messages of a request refused for its size. A walk from `start` to `end` within
+/// `budget` metres only reaches vertices `v` with `d(start, v) + d(v, end) <= budget`,
+/// and since `d(start, end) <= d(start, v) + d(v, end)`, those lie within `(budget +
+/// d(start, end)) / 2` of `start`; two length scales `ell` more keep the vertices its
+/// samples still tell about (correlation `e^-2` there), so that the part's plan is the
+/// whole building's but for what lies further away.
+pub(crate) fn part_hint(b: &Building, start: usize, end: usize, budget: f64, ell: f64) -> String {
+    let (d, _) = metric::shortest_path_tree(b, start);
+    let radius = ((budget + d[end]) / 2.0 + 2.0 * ell).ceil();
     format!(
-        "`trailprint export BUILDING --floor ID -o part.json` writes one floor; \
-         `--around {start} --radius {budget}` keeps every vertex this walk can reach"
+        "`trailprint export BUILDING --floor ID -o part.json` writes one floor; `--around {} \
+         --radius {radius}` keeps every vertex this walk can reach and two length scales \
+         around them",
+        b.vertices[start].id
     )
 }
 

@@ -353,7 +353,7 @@ fn refuse_if_too_slow(
             // Half as much again as the estimate, so that a busier moment does not refuse
             // the retry, and the limit itself for the search.
             (needed.mul_f64(1.5) + limit).as_secs_f64().ceil(),
-            super::part_hint(&p.building.vertices[p.start].id, p.budget),
+            super::part_hint(&p.building, p.start, p.end, p.budget, p.engine.kernel().ell),
         ),
     })
 }

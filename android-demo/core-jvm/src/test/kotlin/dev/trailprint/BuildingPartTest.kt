@@ -39,11 +39,11 @@ class BuildingPartTest {
             }
             val message = refused.message!!
             assertTrue("more than the memory budget of 64 MiB" in message, message)
-            assertTrue("--around v0 --radius 60" in message, message)
+            assertTrue("--around v0 --radius 42" in message, message)
 
-            val part = store.importBuildingPart(whole.id, emptyList(), "v0", 60.0, null, false)
-            assertEquals("Long corridor (within 60 m of v0)", part.name)
-            assertEquals(61uL, part.vertices)
+            val part = store.importBuildingPart(whole.id, emptyList(), "v0", 42.0, null, false)
+            assertEquals("Long corridor (within 42 m of v0)", part.name)
+            assertEquals(43uL, part.vertices)
             assertEquals("part of \"Long corridor\"", part.source)
             val plan = store.newPlan(request(part.id)).use { it.run(null) }
             assertTrue(plan.lengthM > 0.95 * 60.0 && plan.lengthM <= 60.0 + 1e-9, "${plan.lengthM}")
@@ -63,15 +63,16 @@ class BuildingPartTest {
             model.setBudget(60.0)
             model.plan()
             val refused = withTimeout(60_000) { model.state.first { !it.planning && it.error != null } }
-            assertEquals(PartSuggestion("v0", 60.0), refused.suggestedPart, refused.error)
+            // A 60 m round trip reaches 30 m; two length scales (6 m) more.
+            assertEquals(PartSuggestion("v0", 42.0), refused.suggestedPart, refused.error)
             model.planSuggestedPart()
             val opened = withTimeout(60_000) { model.state.first { it.partBuilding != null || it.error != null } }
             assertNull(opened.error)
             assertNull(opened.suggestedPart)
             val part = opened.partBuilding!!
-            assertEquals(61uL, part.vertices)
+            assertEquals(43uL, part.vertices)
             // The same part again (the refusal seen a second time): the building imported before.
-            assertEquals(part.id, api.importBuildingPart(bid, around = "v0", radiusM = 60.0).id)
+            assertEquals(part.id, api.importBuildingPart(bid, around = "v0", radiusM = 42.0).id)
             assertEquals(2, api.buildings().size)
         }
     }
