@@ -72,6 +72,24 @@ fn a_building_refused_for_its_size_is_planned_on_the_part_the_refusal_names() {
     let length = v["length_m"].as_f64().expect("length");
     assert!(length > 0.95 * 60.0 && length <= 60.0 + 1e-9, "{v}");
     assert!(v["utility_nats"].as_f64().is_some_and(|u| u > 0.0), "{v}");
+    // Refused on the part too (16 MiB), the message names no part: it would be the same.
+    let o = run(
+        &db,
+        &[
+            &["plan", "--building", part_s, "--memory-budget", "16"][..],
+            &plan[..4],
+        ]
+        .concat(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        err.contains("more than the memory budget of 16 MiB"),
+        "{err}"
+    );
+    assert!(
+        err.contains("this walk can reach every vertex of this one") && !err.contains("--around"),
+        "{err}"
+    );
 
     // From v0 to v20 within 60 m: nothing beyond (60 + 20) / 2 = 40 m is reachable.
     let to_v20 = words("--start v0 --end v20 --budget 60 --memory-budget 64");

@@ -476,10 +476,14 @@ fn check_memory(
 pub(crate) fn part_hint(b: &Building, start: usize, end: usize, budget: f64, ell: f64) -> String {
     let (d, _) = metric::shortest_path_tree(b, start);
     let radius = ((budget + d[end]) / 2.0 + 2.0 * ell).ceil();
+    let floor = "`trailprint export BUILDING --floor ID -o part.json` writes one floor";
+    if d.iter().all(|&x| x <= radius) {
+        // The part around the start would be the whole building (or the part this is).
+        return format!("{floor}; this walk can reach every vertex of this one");
+    }
     format!(
-        "`trailprint export BUILDING --floor ID -o part.json` writes one floor; `--around {} \
-         --radius {radius}` keeps every vertex this walk can reach and two length scales \
-         around them",
+        "{floor}; `--around {} --radius {radius}` keeps every vertex this walk can reach and \
+         two length scales around them",
         b.vertices[start].id
     )
 }
