@@ -282,6 +282,79 @@ mod tests {
     }
 
     #[test]
+    fn around_a_vertex_keeps_exactly_the_vertices_within_reach_on_random_buildings() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for case in 0..40 {
+            // A random connected graph on two floors: a spanning tree with random chords,
+            // vertex i on floor i % 2 (stairs wherever an edge joins the two).
+            let n = rng.random_range(2..40usize);
+            let vertices: Vec<String> = (0..n)
+                .map(|i| {
+                    // Close together: every edge (0.5 m or more) is longer than the line.
+                    let (x, y) = (rng.random_range(0.0..0.3), rng.random_range(0.0..0.3));
+                    format!(r#"{{"id":"v{i}","x":{x},"y":{y},"floor":{}}}"#, i % 2)
+                })
+                .collect();
+            // Every edge with a length (one that joins the floors needs one).
+            let mut edge = |a: usize, c: usize| {
+                let l: f64 = rng.random_range(0.5..20.0);
+                format!(r#"{{"a":"v{a}","b":"v{c}","length":{l}}}"#)
+            };
+            let mut edges: Vec<String> = Vec::new();
+            let mut pairs = std::collections::HashSet::new();
+            for i in 1..n {
+                let a = (i * 7 + case) % i;
+                pairs.insert((a.min(i), a.max(i)));
+                edges.push(edge(a, i));
+            }
+            for k in 0..n {
+                let (a, c) = ((k * 13 + case) % n, (k * 5 + 3 * case + 1) % n);
+                if a != c && pairs.insert((a.min(c), a.max(c))) {
+                    edges.push(edge(a, c));
+                }
+            }
+            let text = format!(
+                r#"{{"format":"survey-building/1","name":"r","floors":[{{"id":0}},{{"id":1}}],"vertices":[{}],"edges":[{}]}}"#,
+                vertices.join(","),
+                edges.join(",")
+            );
+            let b = Building::from_json(&text, "r").expect("a valid random building");
+            let root = rng.random_range(0..n);
+            let radius = rng.random_range(0.5..60.0);
+            let part = b
+                .part(&PartSpec {
+                    around: Some((b.vertices[root].id.clone(), radius)),
+                    ..PartSpec::default()
+                })
+                .expect("a part around a vertex is connected");
+            let (d, _) = crate::plan::metric::shortest_path_tree(&b, root);
+            let want: Vec<&str> = (0..n)
+                .filter(|&v| d[v] <= radius)
+                .map(|v| b.vertices[v].id.as_str())
+                .collect();
+            assert_eq!(ids(&part), want, "case {case}");
+            let inside = |id: &str| want.contains(&id);
+            let edges_within = b
+                .edges
+                .iter()
+                .filter(|e| inside(&b.vertices[e.a].id) && inside(&b.vertices[e.b].id))
+                .count();
+            assert_eq!(part.edges.len(), edges_within, "case {case}");
+            // Walking distances inside the part are the building's (a shortest way to a
+            // kept vertex only passes kept vertices).
+            let proot = part
+                .require_vertex(&b.vertices[root].id)
+                .expect("root kept");
+            let (pd, _) = crate::plan::metric::shortest_path_tree(&part, proot);
+            for (v, pv) in part.vertices.iter().zip(&pd) {
+                let w = b.require_vertex(&v.id).expect("same ids");
+                assert!((d[w] - pv).abs() < 1e-9, "case {case}, {}", v.id);
+            }
+        }
+    }
+
+    #[test]
     fn a_bad_part_is_refused_with_what_is_wrong() {
         let b = two_floors();
         let err = |spec: PartSpec| b.part(&spec).expect_err("refused").to_string();
