@@ -37,7 +37,7 @@ use crate::building::{Building, GeoOrigin};
 use crate::eval::{MISSING_DBM, reference_grid};
 use crate::floorplan::LocalFrame;
 use crate::gp::predict::GpModel;
-use crate::gp::{Kernel, Point};
+use crate::gp::{Extent, Kernel, Point};
 use crate::store::{StoredCollected, csv_field};
 use crate::{Error, Result};
 
@@ -402,18 +402,12 @@ pub fn walkable_grid(building: &Building, step: f64) -> Result<Vec<Point>> {
             out.extend(fallback.iter().filter(|p| p.floor == floor.id));
             continue;
         }
-        let (mut x0, mut y0, mut x1, mut y1) = (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
+        let Extent { x0, y0, x1, y1 } = Extent::of(
+            polys
+                .iter()
+                .flat_map(|p| p.exterior().coords())
+                .map(|p| (p.x, p.y)),
         );
-        for p in polys.iter().flat_map(|p| p.exterior().coords()) {
-            x0 = x0.min(p.x);
-            y0 = y0.min(p.y);
-            x1 = x1.max(p.x);
-            y1 = y1.max(p.y);
-        }
         let nx = ((x1 - x0) / step).floor() as usize;
         let ny = ((y1 - y0) / step).floor() as usize;
         if (nx + 1).saturating_mul(ny + 1) > 5_000_000 {

@@ -27,6 +27,7 @@ use std::collections::BTreeSet;
 
 use super::{Building, BuildingFile, FORMAT, FloorSpec};
 use crate::building::Fingerprint;
+use crate::gp::Extent;
 use crate::{Error, Result};
 
 /// How far outside the bounding box of a part's vertices (on their floor) a test point or
@@ -95,30 +96,20 @@ impl Building {
         }
         let name = spec.name.clone().unwrap_or_else(|| self.part_name(spec));
         let whole = self.to_file();
-        // The bounding box of the kept vertices on each kept floor, widened by the margin.
-        let boxes: Vec<(i64, [f64; 4])> = kept_floors
+        // The extent of the kept vertices on each kept floor, widened by the margin.
+        let boxes: Vec<(i64, Extent)> = kept_floors
             .iter()
             .map(|&f| {
-                let mut b = [
-                    f64::INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::NEG_INFINITY,
-                ];
-                for v in (0..self.len()).filter(|&v| keep[v]) {
-                    let p = self.vertices[v].pos;
-                    if p.floor == f {
-                        b = [b[0].min(p.x), b[1].min(p.y), b[2].max(p.x), b[3].max(p.y)];
-                    }
-                }
-                let m = EVALUATION_MARGIN_M;
-                (f, [b[0] - m, b[1] - m, b[2] + m, b[3] + m])
+                let on_f = (0..self.len())
+                    .filter(|&v| keep[v] && self.vertices[v].pos.floor == f)
+                    .map(|v| (self.vertices[v].pos.x, self.vertices[v].pos.y));
+                (f, Extent::of(on_f).widened(EVALUATION_MARGIN_M))
             })
             .collect();
         let inside = |fp: &&Fingerprint| {
-            boxes.iter().any(|&(f, b)| {
-                fp.floor == f && fp.x >= b[0] && fp.y >= b[1] && fp.x <= b[2] && fp.y <= b[3]
-            })
+            boxes
+                .iter()
+                .any(|(f, b)| fp.floor == *f && b.contains(fp.x, fp.y))
         };
         let kept_ids: BTreeSet<&str> = (0..self.len())
             .filter(|&v| keep[v])

@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use crate::building::{Building, Fingerprint};
 use crate::gp::predict::GpModel;
-use crate::gp::{Kernel, Point};
+use crate::gp::{Extent, Kernel, Point};
 use crate::samples::Sample;
 use crate::synth::PropagationModel;
 use crate::synth::random::{normal, stream_rng};
@@ -282,14 +282,7 @@ pub fn reference_grid(building: &Building, step: f64, margin: f64) -> Vec<Point>
             .map(|e| (building.vertices[e.a].pos, building.vertices[e.b].pos))
             .filter(|(a, b)| a.floor == floor.id && b.floor == floor.id)
             .collect();
-        let (mut x0, mut y0) = (f64::INFINITY, f64::INFINITY);
-        let (mut x1, mut y1) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for p in &verts {
-            x0 = x0.min(p.x);
-            y0 = y0.min(p.y);
-            x1 = x1.max(p.x);
-            y1 = y1.max(p.y);
-        }
+        let Extent { x0, y0, x1, y1 } = Extent::of(verts.iter().map(|p| (p.x, p.y)));
         let nx = ((x1 - x0) / step + 1e-9).floor() as usize + 1;
         let ny = ((y1 - y0) / step + 1e-9).floor() as usize + 1;
         for j in 0..ny {

@@ -368,14 +368,9 @@ pub fn fit_pilot_data(data: &PilotData) -> Result<FitResult> {
         .map(|y| y.norm_squared() / y.len() as f64)
         .sum::<f64>()
         / data.centred().count() as f64;
-    let extent = {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in &data.points {
-            lo = [lo[0].min(p.x), lo[1].min(p.y)];
-            hi = [hi[0].max(p.x), hi[1].max(p.y)];
-        }
-        ((hi[0] - lo[0]).hypot(hi[1] - lo[1])).max(1.0)
-    };
+    let extent = super::Extent::of(data.points.iter().map(|p| (p.x, p.y)))
+        .diagonal()
+        .max(1.0);
     let mut best: Option<([f64; 3], f64)> = None;
     for ell_frac in [0.1, 0.5, 2.0] {
         for noise_frac in [0.05, 0.3] {

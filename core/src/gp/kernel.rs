@@ -35,6 +35,78 @@ impl Point {
     }
 }
 
+/// The smallest axis-aligned rectangle that holds some points, metres: the extent of a
+/// floor's vertices, a walk's samples or a floor plan, for grids, drawings and quick
+/// tests of nearness. Empty (no point added) it has `x0 > x1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extent {
+    pub x0: f64,
+    pub y0: f64,
+    pub x1: f64,
+    pub y1: f64,
+}
+
+impl Extent {
+    /// The extent of no point.
+    pub const EMPTY: Extent = Extent {
+        x0: f64::INFINITY,
+        y0: f64::INFINITY,
+        x1: f64::NEG_INFINITY,
+        y1: f64::NEG_INFINITY,
+    };
+
+    /// The extent of `points` (`(x, y)` pairs).
+    pub fn of(points: impl IntoIterator<Item = (f64, f64)>) -> Extent {
+        let mut e = Extent::EMPTY;
+        for (x, y) in points {
+            e.add(x, y);
+        }
+        e
+    }
+
+    /// Grows the extent to hold `(x, y)`.
+    #[inline]
+    pub fn add(&mut self, x: f64, y: f64) {
+        self.x0 = self.x0.min(x);
+        self.y0 = self.y0.min(y);
+        self.x1 = self.x1.max(x);
+        self.y1 = self.y1.max(y);
+    }
+
+    /// Whether no point was added.
+    pub fn is_empty(&self) -> bool {
+        !(self.x0 <= self.x1 && self.y0 <= self.y1)
+    }
+
+    /// The extent widened by `m` metres on every side.
+    pub fn widened(&self, m: f64) -> Extent {
+        Extent {
+            x0: self.x0 - m,
+            y0: self.y0 - m,
+            x1: self.x1 + m,
+            y1: self.y1 + m,
+        }
+    }
+
+    /// Whether `(x, y)` lies inside or on the border.
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        x >= self.x0 && y >= self.y0 && x <= self.x1 && y <= self.y1
+    }
+
+    /// The squared distance from `(x, y)` to the rectangle (0 inside).
+    #[inline]
+    pub fn distance2(&self, x: f64, y: f64) -> f64 {
+        let dx = (self.x0 - x).max(x - self.x1).max(0.0);
+        let dy = (self.y0 - y).max(y - self.y1).max(0.0);
+        dx * dx + dy * dy
+    }
+
+    /// The length of its diagonal.
+    pub fn diagonal(&self) -> f64 {
+        (self.x1 - self.x0).hypot(self.y1 - self.y0)
+    }
+}
+
 /// Hyperparameters `(sf2, ell, sn2)` of `k(p, q) = sf2 * exp(-|p - q| / ell)` with
 /// observation noise `sn2`. Points on different floors are independent.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -141,5 +213,21 @@ mod tests {
         let z = 25.0f64 - 1e-12;
         let a = (z * z).exp() * libm::erfc(z);
         assert!((erfcx(25.0) - a).abs() / a < 1e-11);
+    }
+
+    #[test]
+    fn an_extent_holds_its_points_and_measures_the_way_to_it() {
+        assert!(Extent::of([]).is_empty());
+        let e = Extent::of([(1.0, 2.0), (4.0, -2.0), (3.0, 6.0)]);
+        assert_eq!((e.x0, e.y0, e.x1, e.y1), (1.0, -2.0, 4.0, 6.0));
+        assert!(!e.is_empty() && e.contains(1.0, 6.0) && !e.contains(0.99, 0.0));
+        assert_eq!(e.diagonal(), 3.0f64.hypot(8.0));
+        // Inside: 0; beside an edge: the gap squared; beyond a corner: both gaps.
+        assert_eq!(e.distance2(2.0, 0.0), 0.0);
+        assert_eq!(e.distance2(7.0, 0.0), 9.0);
+        assert_eq!(e.distance2(-2.0, 10.0), 9.0 + 16.0);
+        let w = e.widened(1.0);
+        assert_eq!((w.x0, w.y0, w.x1, w.y1), (0.0, -3.0, 5.0, 7.0));
+        assert!(w.contains(0.0, 7.0) && !e.contains(0.0, 7.0));
     }
 }

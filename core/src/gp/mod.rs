@@ -5,4 +5,4 @@ pub mod kernel;
 pub mod predict;
 
 pub use fit::{FitResult, fit_kernel};
-pub use kernel::{Kernel, Point};
+pub use kernel::{Extent, Kernel, Point};

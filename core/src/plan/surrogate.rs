@@ -28,7 +28,7 @@ use std::sync::Arc;
 use super::Problem;
 use crate::Result;
 use crate::building::Building;
-use crate::gp::{Kernel, Point};
+use crate::gp::{Extent, Kernel, Point};
 use crate::samples::{Checkpoint, Surveyor, WalkSampler, sample_walk_checkpoints};
 
 /// Observations each vertex is conditioned on.
@@ -257,19 +257,15 @@ impl Surrogate {
         let mut floors: Vec<i64> = added.iter().map(|(q, _)| q.floor).collect();
         floors.sort_unstable();
         floors.dedup();
-        let boxes: Vec<(i64, [f64; 4], Tree)> = floors
+        let boxes: Vec<(i64, Extent, Tree)> = floors
             .iter()
             .map(|&f| {
-                let mut b = [
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                ];
-                for (q, _) in added.iter().filter(|(q, _)| q.floor == f) {
-                    b = [b[0].min(q.x), b[1].max(q.x), b[2].min(q.y), b[3].max(q.y)];
-                }
-                (f, b, Tree::new(&added, f))
+                let on_f = added.iter().filter(|(q, _)| q.floor == f);
+                (
+                    f,
+                    Extent::of(on_f.map(|(q, _)| (q.x, q.y))),
+                    Tree::new(&added, f),
+                )
             })
             .collect();
         let mut scratch = Scratch::new();
@@ -279,13 +275,9 @@ impl Surrogate {
         let base_ids = frame.obs.len() as u32;
         for (i, v) in self.building.vertices.iter().enumerate() {
             let nv = &frame.near[i];
-            let here = boxes.iter().find(|(f, b, _)| {
-                *f == v.pos.floor && {
-                    let dx = (b[0] - v.pos.x).max(v.pos.x - b[1]).max(0.0);
-                    let dy = (b[2] - v.pos.y).max(v.pos.y - b[3]).max(0.0);
-                    dx * dx + dy * dy < nv.r2
-                }
-            });
+            let here = boxes
+                .iter()
+                .find(|(f, b, _)| *f == v.pos.floor && b.distance2(v.pos.x, v.pos.y) < nv.r2);
             let lost = nv
                 .ids()
                 .iter()

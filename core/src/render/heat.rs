@@ -8,8 +8,8 @@ use super::{RenderOptions, Scene};
 use crate::Result;
 use crate::building::{Building, OutlineKind};
 use crate::eval::reference_grid;
-use crate::gp::Point;
 use crate::gp::predict::GpModel;
+use crate::gp::{Extent, Point};
 
 /// Standard deviation (dB) at each grid point, with the range the colours span.
 pub(super) struct Heat {
@@ -130,14 +130,17 @@ pub(super) fn heat_grid(building: &Building, step: f64, margin: f64) -> Vec<Poin
         }
         let have: std::collections::HashSet<(i64, i64)> =
             grid.iter().filter(on).map(|p| key(p, x0, y0)).collect();
-        let (mut bx0, mut by0) = (f64::INFINITY, f64::INFINITY);
-        let (mut bx1, mut by1) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for c in shapes.iter().flat_map(|p| p.exterior().coords()) {
-            bx0 = bx0.min(c.x);
-            by0 = by0.min(c.y);
-            bx1 = bx1.max(c.x);
-            by1 = by1.max(c.y);
-        }
+        let Extent {
+            x0: bx0,
+            y0: by0,
+            x1: bx1,
+            y1: by1,
+        } = Extent::of(
+            shapes
+                .iter()
+                .flat_map(|p| p.exterior().coords())
+                .map(|c| (c.x, c.y)),
+        );
         let (i0, i1) = (
             ((bx0 - x0) / step).floor() as i64,
             ((bx1 - x0) / step).ceil() as i64,
