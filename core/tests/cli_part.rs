@@ -153,3 +153,52 @@ fn one_floor_is_exported_as_a_building_and_bad_parts_write_nothing() {
         assert!(!bad.exists(), "{args:?} wrote a file");
     }
 }
+
+#[test]
+fn every_command_that_plans_takes_the_memory_budget_its_refusal_names() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let db = dir.path().join("t.db");
+    let file = dir.path().join("corridor.json");
+    corridor(&file, 3000);
+    let b = file.to_str().expect("utf-8");
+    let team = [
+        "team-plan",
+        "--building",
+        b,
+        "--surveyor",
+        "v0:60",
+        "--surveyor",
+        "v100:60",
+    ];
+    let simulate = [
+        "simulate",
+        "--building",
+        b,
+        "--start",
+        "v0",
+        "--budget",
+        "60",
+        "--surveyor",
+        "human",
+    ];
+    let plan = ["plan", "--building", b, "--start", "v0", "--budget", "60"];
+    let utility = ["utility", "--building", b, "--walk", "v0,v1,v2"];
+    for command in [&team[..], &simulate, &plan, &utility] {
+        let o = run(&db, &[command, &["--memory-budget", "16"]].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("more than the memory budget of 16 MiB"),
+            "{command:?}: {err}"
+        );
+    }
+    // The default (512 MiB) holds this building.
+    let out = run_ok(
+        &db,
+        &[&team[..], &["--algorithm", "coverage", "--json"]].concat(),
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("one JSON object");
+    assert!(
+        v["team_utility_nats"].as_f64().is_some_and(|u| u > 0.0),
+        "{v}"
+    );
+}

@@ -8,7 +8,7 @@ use trailprint::store::StorePlanRequest;
 use trailprint::team::SurveyorTask;
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, RouteOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, RouteOpts, json_line};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -52,10 +52,8 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
-    /// Most memory the plan may use, MiB; a larger request is refused with the size it
-    /// needs.
-    #[arg(long, value_name = "MIB", default_value_t = 512)]
-    memory_budget: u64,
+    #[command(flatten)]
+    memory: MemoryOpts,
     /// Show progress on stderr even when it is not a terminal (one line every 0.5 s).
     #[arg(long)]
     progress: bool,
@@ -86,8 +84,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             budget_step: a.budget_step,
             iterations: a.iterations,
         },
-        memory_budget: a.memory_budget.saturating_mul(1 << 20),
-        ..crate::opts::plan_settings(&a.model, a.algorithm, a.seed, a.time_limit)?
+        ..crate::opts::plan_settings(&a.model, a.memory, a.algorithm, a.seed, a.time_limit)?
     };
     let model = settings.model;
     let route = a.route;

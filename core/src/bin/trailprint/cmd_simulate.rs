@@ -21,7 +21,7 @@ use trailprint::session::{
 use trailprint::store::{BuildingRef, ImportOptions, PlanRecord, Store, now_ms};
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, RouteOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, RouteOpts, json_line};
 use crate::store_cli::{building_ref, is_file_spec, open_store};
 
 #[derive(ClapArgs, Debug)]
@@ -40,6 +40,8 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
+    #[command(flatten)]
+    memory: MemoryOpts,
     /// Probability of taking a wrong turn at each vertex.
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     deviate: f64,
@@ -275,6 +277,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             algorithm: a.algorithm,
             seed: a.seed,
             time_limit,
+            memory_budget: a.memory.bytes(),
             ..PlanSettings::default()
         },
     };

@@ -9,7 +9,7 @@ use trailprint::plan::Algorithm;
 use trailprint::store::StoreTeamRequest;
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line};
+use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, json_line};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -42,6 +42,8 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
+    #[command(flatten)]
+    memory: MemoryOpts,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -49,7 +51,8 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let settings = crate::opts::plan_settings(&a.model, a.algorithm, a.seed, a.time_limit)?;
+    let settings =
+        crate::opts::plan_settings(&a.model, a.memory, a.algorithm, a.seed, a.time_limit)?;
     let control = trailprint::plan::Control::new();
     // A building from the database is planned and saved by the store, as on the phone; a
     // file has nowhere to keep the plans, nothing collected and no stored fit.

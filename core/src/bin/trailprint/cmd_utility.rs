@@ -7,7 +7,7 @@ use clap::Args as ClapArgs;
 use trailprint::utility::UtilityEngine;
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, ModelOpts, json_line, split_walk};
+use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, json_line, split_walk};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -27,10 +27,8 @@ pub struct Args {
     model: ModelOpts,
     #[command(flatten)]
     kernel: KernelOpts,
-    /// Most memory the evaluation may use, MiB; a larger one is refused with the size it
-    /// needs.
-    #[arg(long, value_name = "MIB", default_value_t = 512)]
-    memory_budget: u64,
+    #[command(flatten)]
+    memory: MemoryOpts,
     /// One JSON object per walk.
     #[arg(long)]
     json: bool,
@@ -68,7 +66,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         &b,
         samples.iter().copied().max().unwrap_or(0),
         rayon::current_num_threads().min(resolved.len()),
-        a.memory_budget.saturating_mul(1 << 20),
+        a.memory.bytes(),
     )?;
     let engine = UtilityEngine::new(b.clone(), kernel, model)?;
     let utilities = engine.utilities(&resolved);

@@ -173,6 +173,7 @@ pub fn time_limit(seconds: Option<f64>) -> Result<Option<std::time::Duration>> {
 /// seed and `--time-limit`; planner parameters and memory budget at their defaults.
 pub fn plan_settings(
     model: &ModelOpts,
+    memory: MemoryOpts,
     algorithm: trailprint::plan::Algorithm,
     seed: u64,
     time_limit_s: Option<f64>,
@@ -182,8 +183,26 @@ pub fn plan_settings(
         algorithm,
         seed,
         time_limit: time_limit(time_limit_s)?,
+        memory_budget: memory.bytes(),
         ..trailprint::plan::PlanSettings::default()
     })
+}
+
+/// The most memory a plan or an evaluation may use: the option of every command that
+/// plans or evaluates walks, so that a refusal's advice to raise it can be followed there.
+#[derive(ClapArgs, Debug, Clone, Copy)]
+pub struct MemoryOpts {
+    /// Most memory the plan (or evaluation) may use, MiB; a larger request is refused with
+    /// the size it needs.
+    #[arg(long, value_name = "MIB", default_value_t = 512)]
+    pub memory_budget: u64,
+}
+
+impl MemoryOpts {
+    /// The budget in bytes.
+    pub fn bytes(self) -> u64 {
+        self.memory_budget.saturating_mul(1 << 20)
+    }
 }
 
 /// Where a walk starts and ends, and how long it may be.
