@@ -1,10 +1,19 @@
 //! End-to-end: a building too large to plan on the device is cut into a part that is not
 //! (`trailprint export --floor` / `--around --radius`), as the refusal says.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::plan_common::line_json;
 use crate::store_common::{run, run_ok, trailprint, words};
+
+/// A scratch folder with the path of its database and of a 3,000-vertex [`corridor`]
+/// written there.
+fn corridor_3000() -> (tempfile::TempDir, PathBuf, PathBuf) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (db, file) = (dir.path().join("t.db"), dir.path().join("corridor.json"));
+    corridor(&file, 3000);
+    (dir, db, file)
+}
 
 /// A straight corridor of `n` vertices 1 m apart (`v0`, `v1`, ...) named "Long
 /// corridor", a pilot point every 50 m, and the kernel in the file.
@@ -27,10 +36,7 @@ fn corridor(path: &Path, n: usize) {
 
 #[test]
 fn a_building_refused_for_its_size_is_planned_on_the_part_the_refusal_names() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    let file = dir.path().join("corridor.json");
-    corridor(&file, 3000);
+    let (dir, db, file) = corridor_3000();
     run_ok(&db, &["import", file.to_str().expect("utf-8")]);
     let plan = words("--start v0 --budget 60 --memory-budget 64");
     let o = run(
@@ -156,10 +162,7 @@ fn one_floor_is_exported_as_a_building_and_bad_parts_write_nothing() {
 
 #[test]
 fn every_command_that_plans_takes_the_memory_budget_its_refusal_names() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let db = dir.path().join("t.db");
-    let file = dir.path().join("corridor.json");
-    corridor(&file, 3000);
+    let (_dir, db, file) = corridor_3000();
     let b = file.to_str().expect("utf-8");
     let team = [
         "team-plan",

@@ -8,7 +8,7 @@ use trailprint::store::StorePlanRequest;
 use trailprint::team::SurveyorTask;
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, RouteOpts, json_line};
+use crate::opts::{BuildingOpts, EvalOpts, RouteOpts, json_line};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -49,11 +49,7 @@ pub struct Args {
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     #[command(flatten)]
-    model: ModelOpts,
-    #[command(flatten)]
-    kernel: KernelOpts,
-    #[command(flatten)]
-    memory: MemoryOpts,
+    eval: EvalOpts,
     /// Show progress on stderr even when it is not a terminal (one line every 0.5 s).
     #[arg(long)]
     progress: bool,
@@ -84,7 +80,13 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             budget_step: a.budget_step,
             iterations: a.iterations,
         },
-        ..crate::opts::plan_settings(&a.model, a.memory, a.algorithm, a.seed, a.time_limit)?
+        ..crate::opts::plan_settings(
+            &a.eval.model,
+            a.eval.memory,
+            a.algorithm,
+            a.seed,
+            a.time_limit,
+        )?
     };
     let model = settings.model;
     let route = a.route;
@@ -94,7 +96,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     // policy, conditioned on everything collected, saved); a file has nowhere to keep a
     // fit or a plan, and nothing collected.
     let planned = if crate::store_cli::is_file_spec(&a.building.building) {
-        a.kernel.resolve(&b).and_then(|(kernel, source)| {
+        a.eval.kernel.resolve(&b).and_then(|(kernel, source)| {
             let req = PlanRequest::with_settings(
                 &route.start,
                 route.end(),
@@ -115,7 +117,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
                     budget: route.budget,
                 },
                 settings,
-                kernel: a.kernel.kernel,
+                kernel: a.eval.kernel.kernel,
             };
             let saved = store
                 .plan_and_save(bref, &request, &control)

@@ -21,7 +21,7 @@ use trailprint::session::{
 use trailprint::store::{BuildingRef, ImportOptions, PlanRecord, Store, now_ms};
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, RouteOpts, json_line};
+use crate::opts::{BuildingOpts, EvalOpts, RouteOpts, json_line};
 use crate::store_cli::{building_ref, is_file_spec, open_store};
 
 #[derive(ClapArgs, Debug)]
@@ -37,11 +37,7 @@ pub struct Args {
     #[command(flatten)]
     route: RouteOpts,
     #[command(flatten)]
-    model: ModelOpts,
-    #[command(flatten)]
-    kernel: KernelOpts,
-    #[command(flatten)]
-    memory: MemoryOpts,
+    eval: EvalOpts,
     /// Probability of taking a wrong turn at each vertex.
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     deviate: f64,
@@ -250,8 +246,8 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
     let wall = Instant::now();
     let (store, b, bid, where_) = open(&a, db)?;
     let b = Arc::new(b);
-    let (kernel, kernel_source) = a.kernel.resolve(&b)?;
-    let surveyor = a.model.surveyor(a.step_length, a.robot_speed)?;
+    let (kernel, kernel_source) = a.eval.kernel.resolve(&b)?;
+    let surveyor = a.eval.model.surveyor(a.step_length, a.robot_speed)?;
     let sim = SimOptions {
         deviate: a.deviate,
         seed: a.seed,
@@ -277,7 +273,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
             algorithm: a.algorithm,
             seed: a.seed,
             time_limit,
-            memory_budget: a.memory.bytes(),
+            memory_budget: a.eval.memory.bytes(),
             ..PlanSettings::default()
         },
     };

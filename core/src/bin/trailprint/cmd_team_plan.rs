@@ -9,7 +9,7 @@ use trailprint::plan::Algorithm;
 use trailprint::store::StoreTeamRequest;
 use trailprint::team::{SurveyorTask, TeamRequest, plan_team};
 
-use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, json_line};
+use crate::opts::{BuildingOpts, EvalOpts, json_line};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -39,11 +39,7 @@ pub struct Args {
     #[arg(long)]
     ignore_collected: bool,
     #[command(flatten)]
-    model: ModelOpts,
-    #[command(flatten)]
-    kernel: KernelOpts,
-    #[command(flatten)]
-    memory: MemoryOpts,
+    eval: EvalOpts,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -51,14 +47,19 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let settings =
-        crate::opts::plan_settings(&a.model, a.memory, a.algorithm, a.seed, a.time_limit)?;
+    let settings = crate::opts::plan_settings(
+        &a.eval.model,
+        a.eval.memory,
+        a.algorithm,
+        a.seed,
+        a.time_limit,
+    )?;
     let control = trailprint::plan::Control::new();
     // A building from the database is planned and saved by the store, as on the phone; a
     // file has nowhere to keep the plans, nothing collected and no stored fit.
     let (team, plan_ids, kernel, source, conditioned_on) =
         if crate::store_cli::is_file_spec(&a.building.building) {
-            let (kernel, source) = a.kernel.resolve(&b)?;
+            let (kernel, source) = a.eval.kernel.resolve(&b)?;
             let req = TeamRequest {
                 surveyors: a.surveyors,
                 kernel,
@@ -79,7 +80,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             let req = StoreTeamRequest {
                 members: a.surveyors,
                 settings,
-                kernel: a.kernel.kernel,
+                kernel: a.eval.kernel.kernel,
                 independent: a.independent,
                 rounds: a.rounds,
                 condition_on_collected: !a.ignore_collected,

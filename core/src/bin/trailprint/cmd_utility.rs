@@ -7,7 +7,7 @@ use clap::Args as ClapArgs;
 use trailprint::utility::UtilityEngine;
 use trailprint::{Error, Result};
 
-use crate::opts::{BuildingOpts, KernelOpts, MemoryOpts, ModelOpts, json_line, split_walk};
+use crate::opts::{BuildingOpts, EvalOpts, json_line, split_walk};
 
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -24,11 +24,7 @@ pub struct Args {
     #[arg(long)]
     walks_file: Option<PathBuf>,
     #[command(flatten)]
-    model: ModelOpts,
-    #[command(flatten)]
-    kernel: KernelOpts,
-    #[command(flatten)]
-    memory: MemoryOpts,
+    eval: EvalOpts,
     /// One JSON object per walk.
     #[arg(long)]
     json: bool,
@@ -36,8 +32,8 @@ pub struct Args {
 
 pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
     let b = Arc::new(a.building.load(db)?);
-    let model = a.model.model()?;
-    let (kernel, source) = a.kernel.resolve(&b)?;
+    let model = a.eval.model.model()?;
+    let (kernel, source) = a.eval.kernel.resolve(&b)?;
     let walks: Vec<(String, Vec<String>)> = match (&a.walk, &a.walks_file) {
         (Some(w), _) => vec![("--walk".to_string(), split_walk(w))],
         (None, Some(path)) => {
@@ -66,7 +62,7 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         &b,
         samples.iter().copied().max().unwrap_or(0),
         rayon::current_num_threads().min(resolved.len()),
-        a.memory.bytes(),
+        a.eval.memory.bytes(),
     )?;
     let engine = UtilityEngine::new(b.clone(), kernel, model)?;
     let utilities = engine.utilities(&resolved);

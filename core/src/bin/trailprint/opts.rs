@@ -188,6 +188,18 @@ pub fn plan_settings(
     })
 }
 
+/// How the walks of a command are evaluated: who walks, the kernel and the memory the
+/// evaluation may take (every command that plans or evaluates walks).
+#[derive(ClapArgs, Debug, Clone)]
+pub struct EvalOpts {
+    #[command(flatten)]
+    pub model: ModelOpts,
+    #[command(flatten)]
+    pub kernel: KernelOpts,
+    #[command(flatten)]
+    pub memory: MemoryOpts,
+}
+
 /// The most memory a plan or an evaluation may use: the option of every command that
 /// plans or evaluates walks, so that a refusal's advice to raise it can be followed there.
 #[derive(ClapArgs, Debug, Clone, Copy)]
