@@ -38,6 +38,11 @@ pub struct TeamPlanRequest {
     pub time_limit_s: Option<f64>,
     /// Plan each member alone (for comparison) instead of as a team.
     pub independent: bool,
+    /// Most memory each member's planning may use, MiB (null: 512), as
+    /// `PlanRequest.memoryBudgetMb`: a request that would need more is refused with
+    /// `InvalidRequest` naming the size, before anything is allocated.
+    #[uniffi(default)]
+    pub memory_budget_mb: Option<u64>,
 }
 
 /// The team's plans, saved in the store (one per member, in order): each member starts a
@@ -108,7 +113,7 @@ impl TrailprintStore {
                 request.algorithm,
                 request.seed,
                 request.time_limit_s,
-                None,
+                request.memory_budget_mb,
             )?,
             kernel: None,
             independent: request.independent,

@@ -2,6 +2,8 @@ package dev.trailprint
 
 import dev.trailprint.ffi.PlanAlgorithm
 import dev.trailprint.ffi.PlanRequest
+import dev.trailprint.ffi.TeamMember
+import dev.trailprint.ffi.TeamPlanRequest
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.defaultRobotProfile
@@ -74,6 +76,21 @@ class BuildingPartTest {
             // The same part again (the refusal seen a second time): the building imported before.
             assertEquals(part.id, api.importBuildingPart(bid, around = "v0", radiusM = 42.0).id)
             assertEquals(2, api.buildings().size)
+        }
+    }
+
+    @Test
+    fun aTeamPlanTakesThePhonesMemoryBudgetToo() {
+        TrailprintStore.openInMemory().use { store ->
+            val whole = store.importBuildingJson(corridor(3000), "corridor.json", false)
+            val members = listOf(TeamMember("v0", "v0", 30.0), TeamMember("v20", "v20", 30.0))
+            fun team(bid: Long) = store.planTeam(
+                TeamPlanRequest(bid, members, defaultRobotProfile(), PlanAlgorithm.COVERAGE, 1uL, null, false, 64uL),
+            )
+            val refused = assertFailsWith<TrailprintException.InvalidRequest> { team(whole.id) }
+            assertTrue("more than the memory budget of 64 MiB" in refused.message!!, refused.message)
+            val part = store.importBuildingPart(whole.id, emptyList(), "v0", 80.0, null, false)
+            assertEquals(2, team(part.id).planIds.size)
         }
     }
 
