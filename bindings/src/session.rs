@@ -31,10 +31,15 @@ pub struct SessionOptions {
     pub calibration_weight_steps: f64,
     /// Seed of the replanner: replan k of the session uses seed + k (default 1).
     pub seed: u64,
+    /// Most memory a replan may use, MiB (null: 512), as `PlanRequest.memoryBudgetMb`: what
+    /// the phone allows.
+    #[uniffi(default)]
+    pub memory_budget_mb: Option<u64>,
 }
 
 impl From<SessionOptions> for core::SessionOptions {
     fn from(o: SessionOptions) -> Self {
+        let defaults = core::SessionOptions::default();
         core::SessionOptions {
             off_route_slack_m: o.off_route_slack_m,
             off_route_slack_fraction: o.off_route_slack_fraction,
@@ -42,7 +47,8 @@ impl From<SessionOptions> for core::SessionOptions {
             auto_replan: o.auto_replan,
             calibration_weight_steps: o.calibration_weight_steps,
             seed: o.seed,
-            ..core::SessionOptions::default()
+            memory_budget_mb: o.memory_budget_mb.unwrap_or(defaults.memory_budget_mb),
+            ..defaults
         }
     }
 }
@@ -56,6 +62,7 @@ impl From<core::SessionOptions> for SessionOptions {
             auto_replan: o.auto_replan,
             calibration_weight_steps: o.calibration_weight_steps,
             seed: o.seed,
+            memory_budget_mb: Some(o.memory_budget_mb),
         }
     }
 }

@@ -100,6 +100,7 @@ fn main() -> trailprint::Result<()> {
                 end,
                 budget_m: budget - walked,
                 seed: 1,
+                memory_budget: trailprint::plan::PlanSettings::default().memory_budget,
             })?;
             let secs = t0.elapsed().as_secs_f64();
             println!(

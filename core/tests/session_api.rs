@@ -313,6 +313,7 @@ fn sessions_are_send_and_replay_is_fast() {
             end: b.len() - 1,
             budget_m: 150.0,
             seed: 1,
+            memory_budget: trailprint::plan::PlanSettings::default().memory_budget,
         },
     )
     .expect("plan");

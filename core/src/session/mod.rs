@@ -418,6 +418,11 @@ impl Session {
                     end,
                     budget_m: budget,
                     seed,
+                    memory_budget: this
+                        .tracker
+                        .options()
+                        .memory_budget_mb
+                        .saturating_mul(1 << 20),
                 })
             }
         };

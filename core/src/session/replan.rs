@@ -29,6 +29,8 @@ pub struct ReplanRequest<'a> {
     pub end: usize,
     pub budget_m: f64,
     pub seed: u64,
+    /// Most memory the replan may use, bytes ([`crate::plan::PlanSettings::memory_budget`]).
+    pub memory_budget: u64,
 }
 
 /// A walk planner usable for replanning.
@@ -260,6 +262,7 @@ impl Replanner for PlannerReplanner {
             seed: r.seed,
             time_limit: self.time_limit,
             params: self.params,
+            memory_budget: r.memory_budget,
             ..Default::default()
         };
         let req = crate::plan::PlanRequest::with_settings(

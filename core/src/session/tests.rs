@@ -309,6 +309,7 @@ fn demo_session(surveyor: Surveyor, budget: f64) -> (Arc<MemoryLog>, Session) {
             end,
             budget_m: budget,
             seed: 1,
+            memory_budget: SessionOptions::default().memory_budget_mb << 20,
         })
         .expect("plan");
     let ids = b.walk_ids(&walk);
@@ -672,5 +673,45 @@ fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() 
         r.utility_nats > planned.utility_nats,
         "{r:?} against {}",
         planned.utility_nats
+    );
+}
+
+#[test]
+fn a_replan_keeps_to_the_sessions_memory_budget() {
+    let b = Arc::new(Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo"));
+    let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
+    let request = |memory_budget_mb: u64| ReplanRequest {
+        building: &b,
+        kernel: k,
+        model: Surveyor::robot(),
+        prior: &[],
+        start: 0,
+        end: 0,
+        budget_m: 20.0,
+        seed: 1,
+        memory_budget: memory_budget_mb << 20,
+    };
+    let replanner = PlannerReplanner::new(crate::plan::Algorithm::Coverage);
+    let e = replanner
+        .replan(&request(1))
+        .expect_err("1 MiB is too little");
+    assert!(
+        e.to_string()
+            .contains("more than the memory budget of 1 MiB"),
+        "{e}"
+    );
+    let walk = replanner
+        .replan(&request(SessionOptions::default().memory_budget_mb))
+        .expect("the default holds the demo");
+    assert!(b.walk_length(&walk) <= 20.0 + 1e-9);
+    let zero = SessionOptions {
+        memory_budget_mb: 0,
+        ..SessionOptions::default()
+    };
+    assert!(
+        zero.validate()
+            .expect_err("0 MiB")
+            .to_string()
+            .contains("memory_budget_mb")
     );
 }

@@ -46,6 +46,9 @@ pub struct SessionOptions {
     /// Replans keep part of the budget left in reserve for wrong turns, following the
     /// rate of wrong turns observed so far (see `Session::replan`).
     pub deviation_reserve: bool,
+    /// Most memory a replan may use, MiB (the plan's own `memory_budget`): on a phone,
+    /// what the app allows. A replan that would need more is refused with the size.
+    pub memory_budget_mb: u64,
 }
 
 impl Default for SessionOptions {
@@ -58,6 +61,7 @@ impl Default for SessionOptions {
             calibration_weight_steps: 20.0,
             seed: 1,
             deviation_reserve: true,
+            memory_budget_mb: crate::plan::PlanSettings::default().memory_budget >> 20,
         }
     }
 }
@@ -74,6 +78,11 @@ impl SessionOptions {
             return Err(Error::InvalidRequest(format!(
                 "session options: {name} must be a finite number >= 0, got {v}"
             )));
+        }
+        if self.memory_budget_mb == 0 {
+            return Err(Error::InvalidRequest(
+                "session options: memory_budget_mb must be at least 1 MiB, got 0".into(),
+            ));
         }
         Ok(())
     }

@@ -290,6 +290,7 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         off_route_slack_m: a.slack,
         seed: a.seed,
         deviation_reserve: !a.no_reserve,
+        memory_budget_mb: a.eval.memory.memory_budget,
         ..SessionOptions::default()
     };
     let log: Arc<dyn SessionLog> = store.clone();
