@@ -197,8 +197,8 @@ impl TrailprintStore {
         replace: bool,
     ) -> Result<BuildingSummary> {
         let around = match (around, radius_m) {
-            (Some(v), Some(r)) => Some((v, r)),
-            (None, None) => None,
+            (Some(v), Some(r)) => vec![(v, r)],
+            (None, None) => Vec::new(),
             _ => {
                 return Err(trailprint::Error::InvalidRequest(
                     "a part around a vertex needs both the vertex and the radius".into(),

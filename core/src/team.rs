@@ -142,6 +142,34 @@ fn team_utility_of(
 ///
 /// # Errors
 /// An empty team, or any error of [`plan_with_prior`] for a surveyor (named by index).
+/// The part of the building that holds every vertex any surveyor's walk can reach, for a
+/// refusal for size: one walking distance around the first surveyor's start that holds
+/// each surveyor's reach ([`crate::plan::reach_radius`] around their start, plus the way
+/// to it), so the part is in one piece; empty when it would be every vertex.
+fn team_part_hint(b: &Building, req: &TeamRequest) -> String {
+    let Some(first) = req.surveyors.first().and_then(|t| b.vertex_index(&t.start)) else {
+        return String::new();
+    };
+    let (from_first, _) = crate::plan::metric::shortest_path_tree(b, first);
+    let mut radius = 0.0f64;
+    for t in &req.surveyors {
+        let (Some(s), Some(e)) = (b.vertex_index(&t.start), b.vertex_index(&t.end)) else {
+            return String::new();
+        };
+        match crate::plan::reach_radius(b, s, e, t.budget, req.kernel.ell) {
+            Some(r) => radius = radius.max((from_first[s] + r).ceil()),
+            None => return String::new(),
+        }
+    }
+    if from_first.iter().all(|&d| d <= radius) {
+        return String::new();
+    }
+    format!(
+        "; for the whole team, one part that holds every surveyor's walk: `--around {} --radius {radius}`",
+        b.vertices[first].id
+    )
+}
+
 pub fn plan_team(
     building: Arc<Building>,
     req: &TeamRequest,
@@ -162,11 +190,14 @@ pub fn plan_team(
             needed,
             message: format!("surveyor {} ({}): {message}", i + 1, req.surveyors[i].start),
         },
-        other => Error::InvalidRequest(format!(
-            "surveyor {} ({}): {other}",
-            i + 1,
-            req.surveyors[i].start
-        )),
+        other => {
+            let mut message = format!("surveyor {} ({}): {other}", i + 1, req.surveyors[i].start);
+            // A part that names one surveyor's reach would leave the others out.
+            if message.contains("`--around ") {
+                message.push_str(&team_part_hint(&building, req));
+            }
+            Error::InvalidRequest(message)
+        }
     };
     // Every run gets the whole time limit of the shared settings: the clock starts
     // at each run, not at a start the caller may have set for one plan.

@@ -205,3 +205,46 @@ fn every_command_that_plans_takes_the_memory_budget_its_refusal_names() {
         "{v}"
     );
 }
+
+#[test]
+fn a_team_refused_for_its_size_is_planned_on_the_one_part_its_refusal_names() {
+    let (dir, db, file) = corridor_3000();
+    let b = file.to_str().expect("utf-8");
+    let team = words("--surveyor v0:60 --surveyor v100:60 --memory-budget 64 --algorithm coverage");
+    let o = run(&db, &[&["team-plan", "--building", b][..], &team].concat());
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{err}");
+    // v100's reach (30 m and two length scales) is 100 m away from v0: 142 m around v0.
+    let hint = err
+        .split("for the whole team, one part that holds every surveyor's walk: `")
+        .nth(1)
+        .and_then(|rest| rest.split('`').next())
+        .unwrap_or_else(|| panic!("no team part in: {err}"));
+    assert_eq!(hint, "--around v0 --radius 142");
+    let part = dir.path().join("team.json");
+    let part_s = part.to_str().expect("utf-8");
+    run_ok(
+        &db,
+        &[&["export", b, "-o", part_s][..], &words(hint)].concat(),
+    );
+    let out = run_ok(
+        &db,
+        &[&["team-plan", "--building", part_s, "--json"][..], &team].concat(),
+    );
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("one JSON object");
+    assert_eq!(v["walks"].as_array().map(Vec::len), Some(2), "{v}");
+
+    // Several --around, each with its --radius: their union, in one piece or refused.
+    let two = dir.path().join("two.json");
+    let two_s = two.to_str().expect("utf-8");
+    let union = words("--around v0 --radius 10 --around v15 --radius 5");
+    run_ok(&db, &[&["export", b, "-o", two_s][..], &union].concat());
+    let p = trailprint::Building::load(&two).expect("valid");
+    assert_eq!(p.len(), 21); // v0..v20
+    let apart = words("--around v0 --radius 10 --around v50 --radius 5");
+    let o = run(&db, &[&["export", b, "-o", two_s][..], &apart].concat());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("disconnected"));
+    let unpaired = words("--around v0 --around v5 --radius 5");
+    let o = run(&db, &[&["export", b, "-o", two_s][..], &unpaired].concat());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("each --around takes one --radius"));
+}

@@ -725,7 +725,7 @@ fn the_same_part_asked_for_twice_is_one_building() {
         .id
         .clone();
     let spec = PartSpec {
-        around: Some((first_vertex, 12.0)),
+        around: vec![(first_vertex, 12.0)],
         ..PartSpec::default()
     };
     let opts = ImportOptions::default();
@@ -745,7 +745,11 @@ fn the_same_part_asked_for_twice_is_one_building() {
     // Another part under that name is refused as any import of a taken name is.
     let wider = PartSpec {
         name: Some(a.name.clone()),
-        around: spec.around.clone().map(|(v, r)| (v, 2.0 * r)),
+        around: spec
+            .around
+            .iter()
+            .map(|(v, r)| (v.clone(), 2.0 * r))
+            .collect(),
         ..PartSpec::default()
     };
     let e = store

@@ -9,8 +9,9 @@
 //!
 //! What the part keeps:
 //! - the vertices on the floors asked for (all floors when none are), and of those, with
-//!   `around`, the ones within the walking distance of the vertex named, walking on the kept
-//!   floors only; the edges between two kept vertices, with their lengths as written;
+//!   `around`, the ones within the walking distance of a vertex named (of any of them, for
+//!   the walks of a team), walking on the kept floors only; the edges between two kept
+//!   vertices, with their lengths as written;
 //! - the pilot data of the kept floors, all of it: it is what the kernel is fitted on and
 //!   what the prior is conditioned on, and a pilot location outside the part only
 //!   conditions the part's vertices as far as it is correlated with them;
@@ -39,9 +40,10 @@ pub const EVALUATION_MARGIN_M: f64 = 2.0;
 pub struct PartSpec {
     /// Floor ids to keep; empty: every floor.
     pub floors: Vec<i64>,
-    /// Keep only the vertices within this walking distance (metres) of this vertex (id),
-    /// walking on the kept floors.
-    pub around: Option<(String, f64)>,
+    /// Keep only the vertices within one of these walking distances (metres) of its
+    /// vertex (id), walking on the kept floors; empty: no such limit. Several: the union
+    /// (the walks of a team).
+    pub around: Vec<(String, f64)>,
     /// The part's name; `None`: the building's, followed by what was kept
     /// (`"Office (floor 1)"`, `"Office (within 120 m of f0-c00)"`).
     pub name: Option<String>,
@@ -64,26 +66,28 @@ impl Building {
         }
         let on_floor =
             |v: usize| spec.floors.is_empty() || spec.floors.contains(&self.vertices[v].pos.floor);
-        let keep: Vec<bool> = match &spec.around {
-            None => (0..self.len()).map(on_floor).collect(),
-            Some((id, radius)) => {
-                if !(radius.is_finite() && *radius > 0.0) {
-                    return Err(Error::InvalidRequest(format!(
-                        "the radius of a part must be a positive number of metres, got {radius}"
-                    )));
-                }
-                let root = self.require_vertex(id)?;
-                if !on_floor(root) {
-                    return Err(Error::InvalidRequest(format!(
-                        "vertex {id:?} is on floor {}, which the part does not keep (floors {})",
-                        self.vertices[root].pos.floor,
-                        join(spec.floors.iter())
-                    )));
-                }
-                let (d, _) = crate::plan::metric::shortest_path_tree_within(self, root, &on_floor);
-                d.iter().map(|&d| d <= *radius).collect()
+        let mut keep: Vec<bool> = (0..self.len())
+            .map(|v| spec.around.is_empty() && on_floor(v))
+            .collect();
+        for (id, radius) in &spec.around {
+            if !(radius.is_finite() && *radius > 0.0) {
+                return Err(Error::InvalidRequest(format!(
+                    "the radius of a part must be a positive number of metres, got {radius}"
+                )));
             }
-        };
+            let root = self.require_vertex(id)?;
+            if !on_floor(root) {
+                return Err(Error::InvalidRequest(format!(
+                    "vertex {id:?} is on floor {}, which the part does not keep (floors {})",
+                    self.vertices[root].pos.floor,
+                    join(spec.floors.iter())
+                )));
+            }
+            let (d, _) = crate::plan::metric::shortest_path_tree_within(self, root, &on_floor);
+            for (k, d) in keep.iter_mut().zip(d) {
+                *k |= d <= *radius;
+            }
+        }
         let kept_floors: BTreeSet<i64> = (0..self.len())
             .filter(|&v| keep[v])
             .map(|v| self.vertices[v].pos.floor)
@@ -150,7 +154,7 @@ impl Building {
         };
         let origin = format!("the part of building {:?}", self.name);
         Building::from_file(file, &origin).map_err(|e| match e {
-            Error::InvalidBuilding { .. } if spec.around.is_none() => {
+            Error::InvalidBuilding { .. } if spec.around.len() != 1 => {
                 Error::InvalidRequest(format!(
                     "{e}; keep the piece around one vertex with a walking distance (on the \
                  command line: --around VERTEX --radius M)"
@@ -168,7 +172,7 @@ impl Building {
             [f] => what.push(format!("floor {f}")),
             fs => what.push(format!("floors {}", join(fs.iter()))),
         }
-        if let Some((id, r)) = &spec.around {
+        for (id, r) in &spec.around {
             what.push(format!("within {r} m of {id}"));
         }
         if what.is_empty() {
@@ -235,7 +239,7 @@ mod tests {
         // From a0: a1 at 10, r0 at 16, a2 at 20, a3 at 30, b2 at 38, b1 at 48.
         let part = b
             .part(&PartSpec {
-                around: Some(("a0".into(), 16.0)),
+                around: vec![("a0".into(), 16.0)],
                 ..PartSpec::default()
             })
             .expect("valid");
@@ -255,7 +259,7 @@ mod tests {
         // The stairs count as walking: 40 m reach floor 1's b2 (38 m), not b1 (48 m).
         let part = b
             .part(&PartSpec {
-                around: Some(("a0".into(), 40.0)),
+                around: vec![("a0".into(), 40.0)],
                 ..PartSpec::default()
             })
             .expect("valid");
@@ -264,12 +268,28 @@ mod tests {
         let part = b
             .part(&PartSpec {
                 floors: vec![1],
-                around: Some(("b0".into(), 100.0)),
+                around: vec![("b0".into(), 100.0)],
                 name: Some("Upstairs".into()),
             })
             .expect("valid");
         assert_eq!(ids(&part), ["b0", "b1", "b2"]);
         assert_eq!(part.name, "Upstairs");
+    }
+
+    #[test]
+    fn around_several_vertices_keeps_the_union_and_a_union_in_pieces_is_refused() {
+        let b = two_floors();
+        // From a0 within 10: a0, a1; from a3 within 8: a3, b2 (the stairs); a2 is 10 from
+        // both, so 10 and 8 leave it out and the part is in two pieces.
+        let spec = |r: f64| PartSpec {
+            around: vec![("a0".into(), 10.0), ("a3".into(), r)],
+            ..PartSpec::default()
+        };
+        let e = b.part(&spec(8.0)).expect_err("two pieces").to_string();
+        assert!(e.contains("disconnected"), "{e}");
+        let part = b.part(&spec(10.0)).expect("a2 joins them");
+        assert_eq!(ids(&part), ["a0", "a1", "a2", "a3", "b2"]);
+        assert_eq!(part.name, "Two (within 10 m of a0, within 10 m of a3)");
     }
 
     #[test]
@@ -315,7 +335,7 @@ mod tests {
             let radius = rng.random_range(0.5..60.0);
             let part = b
                 .part(&PartSpec {
-                    around: Some((b.vertices[root].id.clone(), radius)),
+                    around: vec![(b.vertices[root].id.clone(), radius)],
                     ..PartSpec::default()
                 })
                 .expect("a part around a vertex is connected");
@@ -355,20 +375,20 @@ mod tests {
         });
         assert!(e.contains("no floor 7") && e.contains("0, 1"), "{e}");
         let e = err(PartSpec {
-            around: Some(("zz".into(), 10.0)),
+            around: vec![("zz".into(), 10.0)],
             ..PartSpec::default()
         });
         assert!(e.contains("unknown vertex \"zz\""), "{e}");
         for r in [0.0, -3.0, f64::NAN, f64::INFINITY] {
             let e = err(PartSpec {
-                around: Some(("a0".into(), r)),
+                around: vec![("a0".into(), r)],
                 ..PartSpec::default()
             });
             assert!(e.contains("positive number of metres"), "{r}: {e}");
         }
         let e = err(PartSpec {
             floors: vec![1],
-            around: Some(("a0".into(), 10.0)),
+            around: vec![("a0".into(), 10.0)],
             ..PartSpec::default()
         });
         assert!(e.contains("\"a0\" is on floor 0"), "{e}");
@@ -396,7 +416,7 @@ mod tests {
         let part = b
             .part(&PartSpec {
                 floors: vec![1],
-                around: Some(("b0".into(), 50.0)),
+                around: vec![("b0".into(), 50.0)],
                 ..PartSpec::default()
             })
             .expect("the piece of b0");

@@ -466,26 +466,38 @@ fn check_memory(
     )))
 }
 
-/// How to cut out a part of a building to plan instead (`Building::part`), for the
-/// messages of a request refused for its size. A walk from `start` to `end` within
-/// `budget` metres only reaches vertices `v` with `d(start, v) + d(v, end) <= budget`,
-/// and since `d(start, end) <= d(start, v) + d(v, end)`, those lie within `(budget +
-/// d(start, end)) / 2` of `start`; two length scales `ell` more keep the vertices its
-/// samples still tell about (correlation `e^-2` there), so that the part's plan is the
-/// whole building's but for what lies further away.
-pub(crate) fn part_hint(b: &Building, start: usize, end: usize, budget: f64, ell: f64) -> String {
+/// The walking distance from `start` that holds every vertex a walk from `start` to `end`
+/// within `budget` metres can reach, and two length scales `ell` more; `None` when that
+/// is every vertex of `b`. Such a vertex `v` has `d(start, v) + d(v, end) <= budget`, and
+/// since `d(start, end) <= d(start, v) + d(v, end)`, it lies within `(budget + d(start,
+/// end)) / 2` of `start`; two length scales more keep the vertices its samples still tell
+/// about (correlation `e^-2` there), so that a part's plan is the whole building's but
+/// for what lies further away.
+pub(crate) fn reach_radius(
+    b: &Building,
+    start: usize,
+    end: usize,
+    budget: f64,
+    ell: f64,
+) -> Option<f64> {
     let (d, _) = metric::shortest_path_tree(b, start);
     let radius = ((budget + d[end]) / 2.0 + 2.0 * ell).ceil();
+    (!d.iter().all(|&x| x <= radius)).then_some(radius)
+}
+
+/// How to cut out a part of a building to plan instead (`Building::part`), for the
+/// messages of a request refused for its size ([`reach_radius`]).
+pub(crate) fn part_hint(b: &Building, start: usize, end: usize, budget: f64, ell: f64) -> String {
     let floor = "`trailprint export BUILDING --floor ID -o part.json` writes one floor";
-    if d.iter().all(|&x| x <= radius) {
+    match reach_radius(b, start, end, budget, ell) {
         // The part around the start would be the whole building (or the part this is).
-        return format!("{floor}; this walk can reach every vertex of this one");
+        None => format!("{floor}; this walk can reach every vertex of this one"),
+        Some(radius) => format!(
+            "{floor}; `--around {} --radius {radius}` keeps every vertex this walk can reach \
+             and two length scales around them",
+            b.vertices[start].id
+        ),
     }
-    format!(
-        "{floor}; `--around {} --radius {radius}` keeps every vertex this walk can reach and \
-         two length scales around them",
-        b.vertices[start].id
-    )
 }
 
 /// Checks an outcome and dresses it as a result.

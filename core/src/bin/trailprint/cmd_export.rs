@@ -62,17 +62,17 @@ pub struct Args {
     #[arg(long = "floor", value_name = "ID", conflicts_with_all = ["collected", "fingerprints", "radio_map"])]
     floors: Vec<i64>,
     /// Export only the vertices within --radius metres' walk of this vertex (on the floors
-    /// kept)
+    /// kept); repeat with a --radius each for the walks of a team (their union)
     #[arg(long, value_name = "VERTEX", requires = "radius", conflicts_with_all = ["collected", "fingerprints", "radio_map"])]
-    around: Option<String>,
-    /// With --around: the walking distance, metres
+    around: Vec<String>,
+    /// With --around: the walking distance, metres (one for each --around, in order)
     #[arg(
         long,
         value_name = "M",
         requires = "around",
         allow_negative_numbers = true
     )]
-    radius: Option<f64>,
+    radius: Vec<f64>,
     /// With --floor or --around: the part's name [default: the building's, followed by
     /// what was kept]
     #[arg(long, value_name = "NAME")]
@@ -99,7 +99,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
     if args.fingerprints || args.radio_map {
         return scans(args, db);
     }
-    if !args.floors.is_empty() || args.around.is_some() {
+    if !args.floors.is_empty() || !args.around.is_empty() {
         return part(args, db);
     }
     if args.part_name.is_some() {
@@ -135,10 +135,22 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
 /// `--floor` and `--around`: a part of the building as a building file of its own
 /// ([`Building::part`]).
 fn part(args: &Args, db: Option<&Path>) -> Result<()> {
+    if args.around.len() != args.radius.len() {
+        return Err(trailprint::Error::InvalidRequest(format!(
+            "each --around takes one --radius: {} --around and {} --radius given",
+            args.around.len(),
+            args.radius.len()
+        )));
+    }
     let building = load_building(&args.name, db)?;
     let spec = PartSpec {
         floors: args.floors.clone(),
-        around: args.around.clone().zip(args.radius),
+        around: args
+            .around
+            .iter()
+            .cloned()
+            .zip(args.radius.iter().copied())
+            .collect(),
         name: args.part_name.clone(),
     };
     let part = building.part(&spec)?;
