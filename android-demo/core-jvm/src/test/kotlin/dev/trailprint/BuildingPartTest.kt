@@ -76,6 +76,9 @@ class BuildingPartTest {
             // The same part again (the refusal seen a second time): the building imported before.
             assertEquals(part.id, api.importBuildingPart(bid, around = "v0", radiusM = 42.0).id)
             assertEquals(2, api.buildings().size)
+            // Opened: forgotten, so that going back to the whole building does not open it again.
+            model.partOpened()
+            assertNull(model.state.value.partBuilding)
         }
     }
 

@@ -205,5 +205,8 @@ class PlanModel(
         }
     }
 
+    /** The screen opened [PlanState.partBuilding]: forget it, so that coming back here stays here. */
+    fun partOpened() = _state.update { it.copy(partBuilding = null) }
+
     fun dismissError() = _state.update { it.copy(error = null, suggestedTimeLimitS = null, suggestedPart = null) }
 }

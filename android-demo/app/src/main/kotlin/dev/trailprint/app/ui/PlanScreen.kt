@@ -62,7 +62,12 @@ fun PlanScreen(
     val s by vm.model.state.collectAsStateWithLifecycle()
     val m = vm.model
     // A part imported after a refusal for memory: plan on it.
-    LaunchedEffect(s.partBuilding) { s.partBuilding?.let { onOpenBuilding(it.id) } }
+    LaunchedEffect(s.partBuilding) {
+        s.partBuilding?.let {
+            m.partOpened()
+            onOpenBuilding(it.id)
+        }
+    }
     Column(Modifier.fillMaxSize().padding(12.dp), verticalArrangement = Arrangement.spacedBy(8.dp)) {
         Text(s.map?.name ?: "Loading…", style = androidx.compose.material3.MaterialTheme.typography.titleLarge)
         Text("Start: ${s.start ?: "tap a vertex"}   End: ${s.end ?: "tap a vertex"}")
