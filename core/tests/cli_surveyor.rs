@@ -507,6 +507,22 @@ fn errors_say_what_would_do() {
             "{cmd}: {e}"
         );
     }
+    // An absurd budget is named as typed, not as 309 digits.
+    let e = run_err(
+        &db,
+        &[
+            "plan",
+            "--building",
+            DEMO,
+            "--start",
+            "f0-c00",
+            "--budget=1e308",
+        ],
+    );
+    assert!(
+        e.contains("budget 1e308 m is more than 4 times") && e.len() < 600,
+        "{e}"
+    );
     // A directory as --db.
     let e = run_err(dir.path(), &["buildings"]);
     assert!(

@@ -102,14 +102,14 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
         .map_err(|e| Error::InvalidRequest(format!("end: {e}")))?;
     if !req.budget.is_finite() || req.budget <= 0.0 {
         return Err(Error::InvalidRequest(format!(
-            "budget must be a positive finite number of metres, got {}",
+            "budget must be a positive finite number of metres, got {:?}",
             req.budget
         )));
     }
     let total = building.total_edge_length();
     if req.budget > MAX_BUDGET_FACTOR * total + BUDGET_EPS {
         return Err(Error::InvalidRequest(format!(
-            "budget {} m is more than {MAX_BUDGET_FACTOR} times the {total:.1} m of edges of \
+            "budget {:?} m is more than {MAX_BUDGET_FACTOR} times the {total:.1} m of edges of \
              {:?}: a walk that long only repeats what it has walked; ask for at most {:.1} m \
              (a budget of {total:.1} m or more lets a planner walk every edge)",
             req.budget,
