@@ -340,9 +340,10 @@ struct Part {
 /// (`out.len()` of them). The one formula for them: entries computed again later
 /// ([`Prior::a_row`]) are the same bits as those first factored.
 /// `A`'s entries `(i, from..from + out.len())` on a part of more than [`DENSE_A_FROM`]
-/// vertices, by the vectorised kernel row ([`simd::kernel_row_isa`]): ten times the
-/// rate of [`a_entries`]' scalar `hypot` and `exp` (the 5 million entries of the
-/// generated 3,161-vertex floor: 150 ms of its 350 ms set-up on one core before). The
+/// vertices, by the vectorised kernel row ([`simd::kernel_row_isa`]) instead of
+/// [`a_entries`]' scalar `hypot` and `exp`: the engine's set-up on the generated
+/// 3,161-vertex floor (5 million entries) went from 348 to about 290 ms on one core
+/// (`examples/phase_timing.rs`), the rest being mostly `A`'s factorisation. The
 /// same function computes an entry again ([`Prior::a_row`]), so it has the same bits as
 /// the one factored. Smaller parts keep [`a_entries`], whose figures every earlier
 /// release gave.
