@@ -278,6 +278,9 @@ pub(in crate::plan) fn exact_time_estimate(
         p.utility(prefix)?;
         Ok((work, t0.elapsed().as_secs_f64()))
     };
+    // The matrix the evaluations use, allocated before they are timed (when the plan
+    // keeps it: `KeepScratch`), as it is for every evaluation after the first.
+    p.engine.warm_scratch(walk)?;
     let k2 = prefix_for(full / 4.0)?;
     let k1 = prefix_for(full / 64.0)?.min(k2.saturating_sub(1)).max(1);
     let cost = ExactCost::through(timed(k1)?, timed(k2)?);
@@ -469,6 +472,9 @@ pub fn plan_large_with(
     schedule: Schedule,
 ) -> Result<(Outcome, Stats)> {
     let mut stats = Stats::default();
+    // This thread's exact evaluations (the timed prefixes, the finalists) reuse one
+    // matrix until the plan ends.
+    let _scratch = crate::utility::KeepScratch::new();
     // The limit and deadline the search plans its phases by (none for `Batches`, whose
     // work does not depend on a clock); `run` still stops it at its deadline.
     let (time_limit, deadline) = match schedule {

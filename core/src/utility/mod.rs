@@ -15,7 +15,7 @@ pub mod simd;
 #[cfg(test)]
 mod isa_tests;
 
-pub use engine::{Mark, NearBase, UtilityEngine, WalkState, merge_coincident};
+pub use engine::{KeepScratch, Mark, NearBase, UtilityEngine, WalkState, merge_coincident};
 
 /// Estimated peak memory, bytes, of evaluating walks of at most `samples` samples each
 /// exactly on `building` with `threads` evaluations at a time: the engine's vertex

@@ -18,7 +18,7 @@
 
 use super::{
     Ctx, DENSE, DENSE_KEEP_MAX, DispatchArg, DispatchOut, Entries, Factor, Prior, UtilityEngine,
-    dense, dense_gain, dispatch, s_side_layouts, s_side_logdet,
+    dense, dense_gain, dispatch, keep_dense, s_side_layouts, s_side_logdet,
 };
 use crate::gp::Point;
 use crate::utility::simd::Points;
@@ -195,9 +195,7 @@ pub(super) fn near_part<const FMA: bool>(
         );
         s_side_logdet::<FMA>(e, &mut a, joint_layout, known_joint, true)
     });
-    if a.capacity() <= DENSE_KEEP_MAX {
-        DENSE.set(a);
-    }
+    keep_dense(a);
     Some(ld_s? - ld_post?)
 }
 
