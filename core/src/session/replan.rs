@@ -263,7 +263,6 @@ impl Replanner for PlannerReplanner {
             time_limit: self.time_limit,
             params: self.params,
             memory_budget: r.memory_budget,
-            ..Default::default()
         };
         let req = crate::plan::PlanRequest::with_settings(
             &b.vertices[r.start].id,
