@@ -165,9 +165,6 @@ impl Fingerprint {
     }
 }
 
-/// Largest coordinate magnitude of an outline point, metres (SPEC 7: |x|, |y| <= 1e6).
-pub const MAX_COORDINATE_M: f64 = 1e6;
-
 /// WGS84 position of the local origin (SPEC 7 `geo`): `x` points east and `y` north, in
 /// metres on a local tangent plane. Buildings made from floor plans carry it so that exports
 /// can give longitude and latitude.
@@ -1123,11 +1120,11 @@ fn validate_outline(
     for (j, p) in o.points.iter().enumerate() {
         for (k, name) in ["x", "y"].iter().enumerate() {
             let v = p[k];
-            if !v.is_finite() || v.abs() > MAX_COORDINATE_M {
+            if !coordinate_ok(v) {
                 return Err((
                     format!("outlines[{i}].points[{j}][{k}]"),
                     format!(
-                        "{what}: {name} must be a finite number of metres with |{name}| <= {MAX_COORDINATE_M}, got {v}"
+                        "{what}: {name} must be a finite number of metres with |{name}| <= {MAX_COORDINATE:e}, got {v:e}"
                     ),
                 ));
             }

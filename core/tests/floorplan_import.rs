@@ -502,6 +502,11 @@ fn geo_and_outlines_are_validated() {
             r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#,
             "outlines[0].points[1][0]",
         ),
+        // The limit as a vertex's is named (one constant, SPEC 7).
+        (
+            r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#,
+            "|x| <= 1e6, got 2e6",
+        ),
         (
             r#""outlines": [{"kind": "wall", "points": [[0,0]]}]"#,
             "at least 2 points",
