@@ -1075,17 +1075,12 @@ impl UtilityEngine {
     /// measured evaluation time to another walk: a search that cannot afford an exact
     /// evaluation early on times a shorter walk and scales by this.
     pub fn utility_work(&self, walk: &[usize]) -> Result<f64> {
-        let merged = merge_coincident(&self.walk_observations(walk)?, self.kernel.sn2);
         let cube = |x: usize| (x as f64).powi(3) / 6.0;
         Ok(self
             .parts
             .iter()
-            .map(|part| {
-                let nr = if self.parts.len() == 1 {
-                    merged.len()
-                } else {
-                    merged.iter().filter(|(p, _)| p.floor == part.floor).count()
-                };
+            .zip(self.observations_per_part(walk)?)
+            .map(|(part, nr)| {
                 let (ns, nv, known) = (part.prior.pts.len() + nr, part.ctx.nv, part.prior.known);
                 if known > 0 && cube(known) > 1.5 * cube(ns) {
                     cube(ns) + cube(ns + nv) - cube(known)
@@ -1096,6 +1091,23 @@ impl UtilityEngine {
             .sum())
     }
 
+    /// The number of `walk`'s observations (merged, as an evaluation merges them) on each
+    /// floor part, in the order of `parts`.
+    fn observations_per_part(&self, walk: &[usize]) -> Result<Vec<usize>> {
+        let merged = merge_coincident(&self.walk_observations(walk)?, self.kernel.sn2);
+        Ok(self
+            .parts
+            .iter()
+            .map(|part| {
+                if self.parts.len() == 1 {
+                    merged.len()
+                } else {
+                    merged.iter().filter(|(p, _)| p.floor == part.floor).count()
+                }
+            })
+            .collect())
+    }
+
     /// Grows the calling thread's dense matrix to what an exact evaluation of `walk`
     /// needs, when the thread keeps one that large (inside a [`KeepScratch`]; else it
     /// does nothing): an evaluation timed after it measures the factorisation, not the
@@ -1104,16 +1116,11 @@ impl UtilityEngine {
     /// and the next on a grown one, and estimated the generated 3,161-vertex floor's
     /// final evaluation (person 3,116 m) at 64 ms against 207 ms taken.
     pub fn warm_scratch(&self, walk: &[usize]) -> Result<()> {
-        let merged = merge_coincident(&self.walk_observations(walk)?, self.kernel.sn2);
         let need = self
             .parts
             .iter()
-            .map(|part| {
-                let nr = if self.parts.len() == 1 {
-                    merged.len()
-                } else {
-                    merged.iter().filter(|(p, _)| p.floor == part.floor).count()
-                };
+            .zip(self.observations_per_part(walk)?)
+            .map(|(part, nr)| {
                 // Either form's largest matrix is the joint one over D, R and V.
                 dense::Layout::new(part.prior.pts.len() + nr + part.ctx.nv).len()
             })
