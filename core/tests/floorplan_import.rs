@@ -498,14 +498,11 @@ fn geo_and_outlines_are_validated() {
             r#""outlines": [{"kind": "area", "points": [[0,0],[1,0],[1,1],[0,0]]}]"#,
             "repeats the first",
         ),
+        // The limit named as a vertex's is (one constant, SPEC 7).
         (
             r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#,
-            "outlines[0].points[1][0]",
-        ),
-        // The limit as a vertex's is named (one constant, SPEC 7).
-        (
-            r#""outlines": [{"kind": "corridor", "points": [[0,0],[2e6,0],[1,1]]}]"#,
-            "|x| <= 1e6, got 2e6",
+            "outlines[0].points[1][0]: corridor outline: x must be a finite number of metres \
+             with |x| <= 1e6, got 2e6",
         ),
         (
             r#""outlines": [{"kind": "wall", "points": [[0,0]]}]"#,
