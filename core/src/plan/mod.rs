@@ -86,6 +86,16 @@ pub fn solver_for(
     }
 }
 
+/// A number of metres as a person typed it: `100000`, `-5`, and `1e308` rather than its
+/// 309 digits (`{}` writes every digit of a large float, `{:?}` adds `.0` to whole ones).
+fn metres_as_typed(x: f64) -> String {
+    if x.abs() < 1e15 {
+        x.to_string()
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// Checks a request against a building and resolves its end points.
 ///
 /// # Errors
@@ -102,17 +112,17 @@ pub fn validate(building: &Building, req: &PlanRequest) -> Result<(usize, usize)
         .map_err(|e| Error::InvalidRequest(format!("end: {e}")))?;
     if !req.budget.is_finite() || req.budget <= 0.0 {
         return Err(Error::InvalidRequest(format!(
-            "budget must be a positive finite number of metres, got {:?}",
-            req.budget
+            "budget must be a positive finite number of metres, got {}",
+            metres_as_typed(req.budget)
         )));
     }
     let total = building.total_edge_length();
     if req.budget > MAX_BUDGET_FACTOR * total + BUDGET_EPS {
         return Err(Error::InvalidRequest(format!(
-            "budget {:?} m is more than {MAX_BUDGET_FACTOR} times the {total:.1} m of edges of \
+            "budget {} m is more than {MAX_BUDGET_FACTOR} times the {total:.1} m of edges of \
              {:?}: a walk that long only repeats what it has walked; ask for at most {:.1} m \
              (a budget of {total:.1} m or more lets a planner walk every edge)",
-            req.budget,
+            metres_as_typed(req.budget),
             building.name,
             MAX_BUDGET_FACTOR * total
         )));
