@@ -405,6 +405,55 @@ fn many_threads_plan_with_fewer_where_the_memory_budget_needs_it() {
     );
 }
 
+/// A refusal for memory names the longest budget that fits, which plans where 2 m more is
+/// refused again; on a building whose tables alone exceed the memory budget it says that
+/// no budget fits.
+#[test]
+fn a_refusal_for_memory_names_the_longest_budget_that_fits() {
+    let _serial = crate::serial();
+    let b = line(200);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let mut req = PlanRequest::new("v0", "v0", 150.0, kernel());
+    req.settings.algorithm = Algorithm::Coverage;
+    let need = |req: &PlanRequest, budget: f64| {
+        let r = PlanRequest {
+            budget,
+            ..req.clone()
+        };
+        one.install(|| trailprint::plan::estimate_memory(&b, &r, 0))
+    };
+    req.settings.memory_budget = need(&req, 60.0);
+    let run = |r: &PlanRequest| one.install(|| plan(b.clone(), r, &Control::new()));
+    let msg = run(&req).expect_err("150 m does not fit").to_string();
+    let named: f64 = msg
+        .split("a budget of at most ")
+        .nth(1)
+        .and_then(|t| t.split(" m fits").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no budget named: {msg}"));
+    assert!((59.0..=60.0).contains(&named), "{named}: {msg}");
+    let fits = PlanRequest {
+        budget: named,
+        ..req.clone()
+    };
+    run(&fits).expect("the budget named fits");
+    let over = PlanRequest {
+        budget: named + 2.0,
+        ..req.clone()
+    };
+    let e = run(&over).expect_err("2 m more does not").to_string();
+    assert!(e.contains("more than the memory budget"), "{e}");
+    req.settings.memory_budget = need(&req, 0.0) - 1;
+    let e = run(&req).expect_err("nothing fits").to_string();
+    assert!(
+        e.contains("no budget fits: the building's tables alone need about"),
+        "{e}"
+    );
+}
+
 /// `trailprint utility` (and the bindings' `walk_utility`) evaluated any walk on any
 /// building: on a line of 20,000 vertices a 2 m walk took 6.4 GB and 79 s, and aborted
 /// under a 2 GB limit. Now a building whose vertex covariance alone exceeds the memory

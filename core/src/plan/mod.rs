@@ -459,13 +459,31 @@ fn check_memory(
     }
     let need = estimate_memory_with(building, req, prior, 1);
     let mib = |b: u64| b.div_ceil(1 << 20);
+    let shorter = match budget_that_fits(building, req, prior) {
+        Some(b) if b >= metric::shortest_path_tree(building, end).0[start] => {
+            format!("a budget of at most {b:.0} m fits")
+        }
+        Some(_) => "no walk from the start to the end fits".into(),
+        None => format!(
+            "no budget fits: the building's tables alone need about {} MiB",
+            mib(estimate_memory_with(
+                building,
+                &PlanRequest {
+                    budget: 0.0,
+                    ..req.clone()
+                },
+                prior,
+                1
+            ))
+        ),
+    };
     Err(Error::InvalidRequest(format!(
         "planning on {:?} ({} vertices, budget {} m) needs about {} MiB, more than the memory \
          budget of {} MiB: the vertex covariance and the shortest-path table grow with the \
          square of the vertex count and a walk's matrix with its samples; plan one floor or \
-         part of the building ({}), use a shorter budget or a sparser sample interval, or \
-         raise the memory budget (--memory-budget MIB, PlanRequest.memory_budget) if the \
-         device has {} MiB to spare",
+         part of the building ({}), use a shorter budget ({shorter}) or a sparser sample \
+         interval, or raise the memory budget (--memory-budget MIB, \
+         PlanRequest.memory_budget) if the device has {} MiB to spare",
         building.name,
         building.len(),
         req.budget,
@@ -474,6 +492,32 @@ fn check_memory(
         part_hint(building, start, end, req.budget, req.kernel.ell),
         mib(need)
     )))
+}
+
+/// The longest budget, to the metre below, whose plan of `req` fits its memory budget on
+/// one thread ([`estimate_memory_with`] grows with the budget); `None` when not even a
+/// walk of no length does (the vertex tables alone are too large).
+fn budget_that_fits(building: &Building, req: &PlanRequest, prior: usize) -> Option<f64> {
+    let fits = |budget: f64| {
+        let r = PlanRequest {
+            budget,
+            ..req.clone()
+        };
+        estimate_memory_with(building, &r, prior, 1) <= req.settings.memory_budget
+    };
+    if !fits(0.0) {
+        return None;
+    }
+    let (mut lo, mut hi) = (0.0, req.budget);
+    while hi - lo > 0.5 {
+        let mid = 0.5 * (lo + hi);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo.floor())
 }
 
 /// The walking distance from `start` that holds every vertex a walk from `start` to `end`
