@@ -460,6 +460,7 @@ fn a_refusal_for_memory_names_the_longest_budget_that_fits() {
 /// budget is refused at once, naming the size; the same walk on a small building runs.
 #[test]
 fn utility_refuses_a_building_too_large_to_evaluate_before_allocating() {
+    let _serial = crate::serial();
     let dir = tempfile::tempdir().expect("dir");
     let write = |n: usize| {
         let path = dir.path().join(format!("line{n}.json"));
