@@ -1,6 +1,8 @@
 //! An edge basis for the exact utility (development aid, not used by the planners): how
 //! close and how fast `f_D` is when every sample's `L^-1 k_V(p)` is interpolated from
 //! `m` Chebyshev nodes on its edge and the nodes' Gram matrix is computed once.
+//! `docs/benchmark-scale.md` ("Measured for a next step: an edge basis") has its
+//! figures, and those of the basis built into the engine's exact phase (not kept).
 //!
 //! Why: a person's walk of 1,018 m on the 565-vertex mall has 213 samples, and an exact
 //! evaluation is dominated by the triangular solve of their kernel columns against `A`'s
