@@ -303,6 +303,10 @@ impl Metric {
                 .par_chunks_mut(n)
                 .zip(col_p[..g * n].par_chunks_mut(n))
                 .enumerate()
+                // One piece of the group a thread, so that each thread sets up its heap
+                // or buckets (a ring of up to `RING_MAX` lists) once a group, not once a
+                // column.
+                .with_min_len(g.div_ceil(rayon::current_num_threads()))
                 .for_each_init(
                     || (BinaryHeap::new(), buckets.clone()),
                     |(heap, buckets), (k, (d, p))| {
