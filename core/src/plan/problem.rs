@@ -68,7 +68,8 @@ impl Problem {
         // 3,161-vertex floor, least of 5 (`examples/problem_timing.rs`, an idle machine):
         // 0.52-0.53 s one after the other on two cores, 0.34-0.36 s side by side; on one
         // thread 0.68 s either way (there `rayon::join` was measured slower, on a busy
-        // machine, so one thread builds them one after the other).
+        // machine, so one thread builds them one after the other). Since the closure
+        // runs on buckets (decision record 0005, session 59), 0.42-0.44 s on one thread.
         let build_engine = || UtilityEngine::new(building.clone(), kernel, model);
         let build_metric = || Arc::new(Metric::new(&building));
         let (engine, metric) = if rayon::current_num_threads() > 1 {
