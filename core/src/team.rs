@@ -21,7 +21,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::building::Building;
 use crate::gp::Kernel;
-use crate::plan::{Control, PlanRequest, PlanResult, PlanSettings, plan_with_prior};
+use crate::plan::{
+    Control, PlanRequest, PlanResult, PlanSettings, SharedMetric, plan_with_prior_sharing,
+};
 use crate::samples::sample_walk;
 use crate::utility::{Observation, UtilityEngine};
 use crate::{Error, Result};
@@ -141,7 +143,7 @@ fn team_utility_of(
 /// * `control` - cancel token and progress observer, shared by all the planner runs.
 ///
 /// # Errors
-/// An empty team, or any error of [`plan_with_prior`] for a surveyor (named by index).
+/// An empty team, or any error of [`crate::plan::plan_with_prior`] for a surveyor (named by index).
 /// The part of the building that holds every vertex any surveyor's walk can reach, for a
 /// refusal for size: one walking distance around the first surveyor's start that holds
 /// each surveyor's reach ([`crate::plan::reach_radius`] around their start, plus the way
@@ -208,6 +210,11 @@ pub fn plan_team(
     let k = req.surveyors.len();
     let engine =
         UtilityEngine::with_prior(building.clone(), req.kernel, req.settings.model, prior)?;
+    // Every run plans on the same building: its metric closure is built once and kept.
+    let shared = SharedMetric::default();
+    let plan_with_prior = |b: Arc<Building>, r: &PlanRequest, cond: &[Observation], c: &Control| {
+        plan_with_prior_sharing(b, r, cond, c, Some(&shared))
+    };
     let mut walks: Vec<Vec<usize>> = Vec::with_capacity(k);
     let mut results: Vec<PlanResult> = Vec::with_capacity(k);
     for i in 0..k {

@@ -48,7 +48,7 @@ use crate::samples::sample_walk;
 use crate::utility::UtilityEngine;
 use crate::{Error, Result};
 
-pub use metric::Metric;
+pub use metric::{Metric, SharedMetric};
 pub use problem::{Outcome, Problem};
 pub use request::*;
 pub use run::{Control, NoObserver, Observer, Progress, Run};
@@ -207,6 +207,19 @@ pub fn plan_with_prior(
     prior: &[crate::utility::Observation],
     control: &Control,
 ) -> Result<PlanResult> {
+    plan_with_prior_sharing(building, req, prior, control, None)
+}
+
+/// [`plan_with_prior`], taking the building's metric closure from `shared` when it holds
+/// that building's (and leaving it there for the next plan): what a session's replanner
+/// does between its replans.
+pub fn plan_with_prior_sharing(
+    building: Arc<Building>,
+    req: &PlanRequest,
+    prior: &[crate::utility::Observation],
+    control: &Control,
+    shared: Option<&SharedMetric>,
+) -> Result<PlanResult> {
     // The clock starts now, or earlier where the caller says so (loading the building,
     // fitting the kernel): set-up (shortest paths, the engine) counts against the limit.
     let started = control.clock_start();
@@ -219,10 +232,11 @@ pub fn plan_with_prior(
             .num_threads(threads)
             .build()
             .map_err(|e| Error::InvalidRequest(format!("{threads} planning threads: {e}")))?;
-        return pool
-            .install(|| plan_validated(building, req, prior, control, started, (start, end)));
+        return pool.install(|| {
+            plan_validated(building, req, prior, control, started, (start, end), shared)
+        });
     }
-    plan_validated(building, req, prior, control, started, (start, end))
+    plan_validated(building, req, prior, control, started, (start, end), shared)
 }
 
 /// [`plan_with_prior`] once the request is valid and its memory affordable.
@@ -233,10 +247,14 @@ fn plan_validated(
     control: &Control,
     started: std::time::Instant,
     (start, end): (usize, usize),
+    shared: Option<&SharedMetric>,
 ) -> Result<PlanResult> {
     let run = Run::starting_at(control.clone(), req.effective_time_limit(), started)
         .for_algorithm(req.settings.algorithm);
-    let metric = Arc::new(Metric::new(&building));
+    let metric = match shared {
+        Some(s) => s.for_building(&building),
+        None => Arc::new(Metric::new(&building)),
+    };
     let shortest = metric.dist(start, end);
     if !shortest.is_finite() || shortest > req.budget + BUDGET_EPS {
         return Err(Error::Unreachable {

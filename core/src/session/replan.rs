@@ -241,6 +241,9 @@ pub struct PlannerReplanner {
     pub algorithm: crate::plan::Algorithm,
     pub time_limit: Option<std::time::Duration>,
     pub params: crate::plan::Params,
+    /// The session's building's metric closure, built by the first replan and kept for
+    /// the others (shared by clones of this replanner).
+    metric: Arc<crate::plan::SharedMetric>,
 }
 
 impl PlannerReplanner {
@@ -249,6 +252,7 @@ impl PlannerReplanner {
             algorithm,
             time_limit: None,
             params: crate::plan::Params::default(),
+            metric: Arc::default(),
         }
     }
 }
@@ -272,7 +276,11 @@ impl Replanner for PlannerReplanner {
             &settings,
         );
         let control = crate::plan::Control::new();
-        let res = match crate::plan::plan_with_prior(b.clone(), &req, r.prior, &control) {
+        let shared = Some(self.metric.as_ref());
+        let plan = |req: &crate::plan::PlanRequest| {
+            crate::plan::plan_with_prior_sharing(b.clone(), req, r.prior, &control, shared)
+        };
+        let res = match plan(&req) {
             // A surveyor waiting mid-survey needs a walk: where the limit cannot hold one
             // exact evaluation (a robot's long walk on a large floor), a late answer beats
             // none, so plan again with the time it said it needs and the limit on top.
@@ -280,7 +288,7 @@ impl Replanner for PlannerReplanner {
                 let mut req = req;
                 req.settings.time_limit =
                     Some(needed.mul_f64(1.5) + self.time_limit.unwrap_or_default());
-                crate::plan::plan_with_prior(b.clone(), &req, r.prior, &control)?
+                plan(&req)?
             }
             other => other?,
         };

@@ -677,6 +677,34 @@ fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() 
 }
 
 #[test]
+fn replans_on_one_building_share_its_metric_closure_and_plan_as_without() {
+    // The replanner keeps the session's building's closure between replans; a replan
+    // must give the walk a plan without it gives (same seed, a deterministic algorithm),
+    // from the first replan, which builds the closure, and from those that reuse it.
+    let b = Arc::new(Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo"));
+    let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
+    let request = |start: usize, budget_m: f64| ReplanRequest {
+        building: &b,
+        kernel: k,
+        model: Surveyor::human(),
+        prior: &[],
+        start,
+        end: 0,
+        budget_m,
+        seed: 3,
+        memory_budget: SessionOptions::default().memory_budget_mb << 20,
+    };
+    let replanner = PlannerReplanner::new(crate::plan::Algorithm::Greedy);
+    for (start, budget) in [(0, 40.0), (5, 35.0), (0, 60.0)] {
+        let fresh = PlannerReplanner::new(crate::plan::Algorithm::Greedy)
+            .replan(&request(start, budget))
+            .expect("fresh");
+        let kept = replanner.replan(&request(start, budget)).expect("kept");
+        assert_eq!(kept, fresh, "start {start}, budget {budget}");
+    }
+}
+
+#[test]
 fn a_replan_keeps_to_the_sessions_memory_budget() {
     let b = Arc::new(Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo"));
     let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
