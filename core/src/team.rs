@@ -14,6 +14,13 @@
 //!
 //! The team utility is `f_D` of all the surveyors' samples together (SPEC section 3),
 //! conditioned on the same prior.
+//!
+//! Every planner run reports its progress to the caller's observer, its message prefixed
+//! with the run's place in the team plan (`surveyor 2/3, in turn: ...`). A cancel stops the
+//! team plan as it stops one plan: the run under way returns its best walk so far, each
+//! surveyor not yet planned gets the systematic walk ([`crate::plan::Algorithm::Coverage`],
+//! milliseconds), no comparison or refinement run starts, and [`TeamPlan::cancelled`] says
+//! so.
 
 use std::sync::Arc;
 
@@ -22,7 +29,8 @@ use serde::{Deserialize, Serialize};
 use crate::building::Building;
 use crate::gp::Kernel;
 use crate::plan::{
-    Control, PlanRequest, PlanResult, PlanSettings, SharedMetric, plan_with_prior_sharing,
+    Algorithm, Control, Observer, PlanRequest, PlanResult, PlanSettings, Progress, SharedMetric,
+    Termination, plan_with_prior_sharing,
 };
 use crate::samples::sample_walk;
 use crate::utility::{Observation, UtilityEngine};
@@ -111,6 +119,39 @@ pub struct TeamPlan {
     /// Refinement rounds that changed at least one walk.
     pub rounds_used: usize,
     pub independent: bool,
+    /// Whether the plan was cancelled: the walks are what it had then (see the module
+    /// docs), each plan's `termination` says which were cut short.
+    #[serde(default)]
+    pub cancelled: bool,
+}
+
+/// Forwards a planner run's progress to the team plan's observer, the message prefixed
+/// with the run's place in the team plan.
+struct Labelled {
+    inner: Arc<dyn Observer>,
+    label: String,
+}
+
+impl Observer for Labelled {
+    fn progress(&self, p: &Progress) {
+        self.inner.progress(&Progress {
+            message: format!("{}: {}", self.label, p.message),
+            ..p.clone()
+        });
+    }
+}
+
+/// `control` with its progress reports labelled `label`.
+fn labelled(control: &Control, label: String) -> Control {
+    Control {
+        observer: control.observer.as_ref().map(|o| {
+            Arc::new(Labelled {
+                inner: o.clone(),
+                label,
+            }) as Arc<dyn Observer>
+        }),
+        ..control.clone()
+    }
 }
 
 fn observations(b: &Building, req: &PlanRequest, walk: &[usize]) -> Result<Vec<Observation>> {
@@ -225,16 +266,41 @@ pub fn plan_team(
                 cond.extend(observations(&building, &r, w)?);
             }
         }
-        let res =
-            plan_with_prior(building.clone(), &r, &cond, control).map_err(|e| name_err(i, e))?;
+        let label = |what: &str| format!("surveyor {}/{k}, {what}", i + 1);
+        if control.is_cancelled() {
+            // Cancelled before this surveyor's turn: the systematic walk, on a control of
+            // its own (the caller's is cancelled), so that every surveyor has a walk.
+            let quick = Control {
+                cancel: Arc::default(),
+                ..labelled(control, label("cancelled: the systematic walk"))
+            };
+            let mut rq = r.clone();
+            rq.settings.algorithm = Algorithm::Coverage;
+            let mut res = plan_with_prior(building.clone(), &rq, &cond, &quick)
+                .map_err(|e| name_err(i, e))?;
+            res.termination = Termination::Cancelled;
+            walks.push(res.walk_indices.clone());
+            results.push(res);
+            continue;
+        }
+        let what = if req.independent { "alone" } else { "in turn" };
+        let res = plan_with_prior(building.clone(), &r, &cond, &labelled(control, label(what)))
+            .map_err(|e| name_err(i, e))?;
         walks.push(res.walk_indices.clone());
         results.push(res);
-        if !req.independent && !walks.is_empty() {
-            // A heuristic planner conditioned on the others can return a walk worth less to
-            // the team than the walk it would plan alone (for example a shorter one); keep
-            // whichever adds more, so that the team never does worse than in turn alone.
-            let alone = plan_with_prior(building.clone(), &r, prior, control)
-                .map_err(|e| name_err(i, e))?;
+        // A heuristic planner conditioned on the others can return a walk worth less to
+        // the team than the walk it would plan alone (for example a shorter one); keep
+        // whichever adds more, so that the team never does worse than in turn alone. The
+        // first surveyor (nothing to condition on but the prior) was planned alone
+        // already.
+        if !req.independent && cond.len() > prior.len() && !control.is_cancelled() {
+            let alone = plan_with_prior(
+                building.clone(),
+                &r,
+                prior,
+                &labelled(control, label("alone, for comparison")),
+            )
+            .map_err(|e| name_err(i, e))?;
             let mut trial = walks.clone();
             trial[i] = alone.walk_indices.clone();
             if team_utility_of(&building, &engine, &trial, &request_for)?
@@ -250,9 +316,12 @@ pub fn plan_team(
     let mut best = team_utility(&walks)?;
     let mut rounds_used = 0;
     if !req.independent {
-        for round in 0..req.rounds {
+        'rounds: for round in 0..req.rounds {
             let mut changed = false;
             for i in 0..k {
+                if control.is_cancelled() {
+                    break 'rounds;
+                }
                 let mut r = request_for(i);
                 r.settings.seed = r.settings.seed.wrapping_add(1000 * (round as u64 + 1));
                 let mut cond = prior.to_vec();
@@ -261,7 +330,8 @@ pub fn plan_team(
                         cond.extend(observations(&building, &r, w)?);
                     }
                 }
-                let res = plan_with_prior(building.clone(), &r, &cond, control)
+                let what = format!("surveyor {}/{k}, round {}", i + 1, round + 1);
+                let res = plan_with_prior(building.clone(), &r, &cond, &labelled(control, what))
                     .map_err(|e| name_err(i, e))?;
                 let mut trial = walks.clone();
                 trial[i] = res.walk_indices.clone();
@@ -288,6 +358,7 @@ pub fn plan_team(
         team_utility_nats: best,
         rounds_used,
         independent: req.independent,
+        cancelled: control.is_cancelled(),
     })
 }
 
@@ -295,7 +366,6 @@ pub fn plan_team(
 mod tests {
     use super::*;
     use crate::gp::Kernel;
-    use crate::plan::Algorithm;
     use crate::surveyor::Surveyor;
 
     fn area_two() -> Arc<Building> {
@@ -386,6 +456,100 @@ mod tests {
             (team.team_utility_nats - joint).abs() <= 1e-9 * joint.abs().max(1.0),
             "team {} vs joint reference {joint}",
             team.team_utility_nats
+        );
+    }
+
+    /// Records every progress message of a team plan, and cancels it at the first whose
+    /// message starts with `cancel_at`.
+    struct Watch {
+        seen: std::sync::Mutex<Vec<String>>,
+        cancel_at: Option<&'static str>,
+        token: Arc<std::sync::atomic::AtomicBool>,
+    }
+
+    impl Observer for Watch {
+        fn progress(&self, p: &Progress) {
+            if self.cancel_at.is_some_and(|c| p.message.starts_with(c)) {
+                self.token.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+            self.seen.lock().expect("lock").push(p.message.clone());
+        }
+    }
+
+    fn watched(cancel_at: Option<&'static str>) -> (Control, Arc<Watch>) {
+        let control = Control::new();
+        let watch = Arc::new(Watch {
+            seen: std::sync::Mutex::new(Vec::new()),
+            cancel_at,
+            token: control.cancel_token(),
+        });
+        (control.with_observer(watch.clone()), watch)
+    }
+
+    /// What the caller's progress bar shows names the surveyor and the run; the first
+    /// surveyor, conditioned on nothing but the prior, is not planned alone a second time.
+    #[test]
+    fn each_run_reports_which_surveyor_it_plans_and_the_first_is_planned_once() {
+        let (control, watch) = watched(None);
+        let team = plan_team(area_two(), &request(false), &[], &control).expect("team");
+        assert!(!team.cancelled);
+        let seen = watch.seen.lock().expect("lock");
+        for run in [
+            "surveyor 1/2, in turn: ",
+            "surveyor 2/2, in turn: ",
+            "surveyor 2/2, alone, for comparison: ",
+            "surveyor 1/2, round 1: ",
+        ] {
+            assert!(
+                seen.iter().any(|m| m.starts_with(run)),
+                "no {run:?} in {seen:?}"
+            );
+        }
+        assert!(
+            !seen.iter().any(|m| m.starts_with("surveyor 1/2, alone")),
+            "the first surveyor was planned alone again: {seen:?}"
+        );
+    }
+
+    /// A cancel during the second surveyor's run: that run returns its best walk so far,
+    /// the third surveyor gets the systematic walk, nothing else runs, and every surveyor
+    /// has a walk of its route within its budget.
+    #[test]
+    fn a_cancelled_team_plan_returns_a_walk_for_every_surveyor() {
+        let mut req = request(false);
+        req.surveyors.push(SurveyorTask {
+            start: "t29".into(),
+            end: "t29".into(),
+            budget: 60.0,
+        });
+        let (control, watch) = watched(Some("surveyor 2/3, in turn: "));
+        let team = plan_team(area_two(), &req, &[], &control).expect("team");
+        assert!(team.cancelled);
+        assert_eq!(team.rounds_used, 0);
+        assert_eq!(team.plans[0].termination, Termination::Completed);
+        assert_eq!(team.plans[1].termination, Termination::Cancelled);
+        assert_eq!(
+            (team.plans[2].algorithm, team.plans[2].termination),
+            (Algorithm::Coverage, Termination::Cancelled)
+        );
+        for (p, t) in team.plans.iter().zip(&req.surveyors) {
+            assert!(p.length_m <= t.budget + 1e-9, "{} m", p.length_m);
+            assert_eq!(p.walk.first(), Some(&t.start));
+            assert_eq!(p.walk.last(), Some(&t.end));
+            assert!(p.utility_nats > 0.0);
+        }
+        // The systematic walk is a walk, not the way from start to end: it uses the budget.
+        assert!(
+            team.plans[2].length_m > 0.9 * 60.0,
+            "{} m",
+            team.plans[2].length_m
+        );
+        let seen = watch.seen.lock().expect("lock");
+        assert!(
+            !seen
+                .iter()
+                .any(|m| m.contains("round") || m.starts_with("surveyor 2/3, alone")),
+            "a run started after the cancel: {seen:?}"
         );
     }
 

@@ -654,6 +654,86 @@ fn team_plan_keeps_its_walks_as_plans() {
     }
 }
 
+/// `team-plan --progress` shows each run's progress on stderr (stdout stays one JSON
+/// object), and Ctrl-C stops the team plan with a walk for every surveyor, saved.
+#[test]
+fn team_plan_shows_progress_and_ctrl_c_keeps_the_walks_so_far() {
+    use std::io::{BufRead, Read};
+    let (_dir, db, name) = demo_db();
+    // Long enough runs (20 s each) that the interrupt comes during the first.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
+        .arg("--db")
+        .arg(&db)
+        .args([
+            "team-plan",
+            "--building",
+            &name,
+            "--surveyor",
+            "f0-c00:f0-c00:60",
+            "--surveyor",
+            "f0-c15:f0-c15:60",
+            "--time-limit",
+            "20",
+            "--progress",
+            "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let started = std::time::Instant::now();
+    let mut err = std::io::BufReader::new(child.stderr.take().expect("stderr"));
+    let mut first = String::new();
+    err.read_line(&mut first).expect("a progress line");
+    assert!(
+        first.starts_with("planning ") && first.contains("surveyor 1/2, in turn: "),
+        "{first}"
+    );
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let mut rest = String::new();
+    err.read_to_string(&mut rest).expect("stderr");
+    let mut out = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut out)
+        .expect("stdout");
+    let status = child.wait().expect("wait");
+    assert!(status.success(), "{first}{rest}");
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(15),
+        "took {:?} after the interrupt",
+        started.elapsed()
+    );
+    assert!(
+        rest.contains("interrupted: stopping with the best walk so far"),
+        "{rest}"
+    );
+    assert_eq!(out.lines().count(), 1, "{out}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    assert_eq!(v["cancelled"], true, "{v}");
+    assert_eq!(
+        v["terminations"],
+        serde_json::json!(["cancelled", "cancelled"]),
+        "{v}"
+    );
+    let store = trailprint::Store::open(&db).expect("open");
+    let ids = v["plan_ids"].as_array().expect("plan ids");
+    assert_eq!(ids.len(), 2);
+    for (i, (id, start)) in ids.iter().zip(["f0-c00", "f0-c15"]).enumerate() {
+        let p = store.load_plan(id.as_i64().expect("id")).expect("plan");
+        assert_eq!(serde_json::json!(p.record.walk), v["walks"][i]);
+        assert_eq!(p.record.walk.first().map(String::as_str), Some(start));
+        assert_eq!(p.record.walk.last().map(String::as_str), Some(start));
+        assert!(p.record.length_m <= 60.0 + 1e-9);
+    }
+}
+
 /// `plan --start ID` with an id as a user types it, on the bundled buildings: the floor
 /// prefix of the generated ids left out (`c0` for `f0-c00`), leading zeros left out
 /// (`b5` for `b05`), a number past the end, a label instead of an id.

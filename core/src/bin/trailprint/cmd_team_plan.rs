@@ -40,6 +40,10 @@ pub struct Args {
     ignore_collected: bool,
     #[command(flatten)]
     eval: EvalOpts,
+    /// Show progress on stderr even when it is not a terminal (one line every 0.5 s).
+    /// Ctrl-C stops the team plan with the walks it has (see `plan_team`).
+    #[arg(long)]
+    progress: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -54,11 +58,12 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
         a.seed,
         a.time_limit,
     )?;
-    let control = trailprint::plan::Control::new();
+    let live = crate::progress::Live::start(a.progress);
+    let control = live.control.clone();
     // A building from the database is planned and saved by the store, as on the phone; a
     // file has nowhere to keep the plans, nothing collected and no stored fit.
-    let (team, plan_ids, kernel, source, conditioned_on) =
-        if crate::store_cli::is_file_spec(&a.building.building) {
+    let planned = (|| -> Result<_> {
+        Ok(if crate::store_cli::is_file_spec(&a.building.building) {
             let (kernel, source) = a.eval.kernel.resolve(&b)?;
             let req = TeamRequest {
                 surveyors: a.surveyors,
@@ -96,7 +101,10 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
                 source,
                 saved.conditioned_on,
             )
-        };
+        })
+    })();
+    live.finish();
+    let (team, plan_ids, kernel, source, conditioned_on) = planned?;
     if a.json {
         let out = serde_json::json!({
             "walks": team.plans.iter().map(|p| p.walk.clone()).collect::<Vec<_>>(),
@@ -106,6 +114,8 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
             "samples": team.plans.iter().map(|p| p.samples).collect::<Vec<_>>(),
             "independent": team.independent,
             "rounds_used": team.rounds_used,
+            "cancelled": team.cancelled,
+            "terminations": team.plans.iter().map(|p| p.termination.name()).collect::<Vec<_>>(),
             "conditioned_on_collected": conditioned_on,
             "plan_ids": plan_ids,
             "kernel": kernel,
@@ -135,6 +145,22 @@ pub fn run(a: Args, db: Option<&std::path::Path>) -> Result<()> {
                 p.samples,
                 p.utility_nats,
                 p.walk.join(",")
+            );
+        }
+        if team.cancelled {
+            println!(
+                "cancelled       the walks planned so far ({}); a surveyor not yet planned has the systematic walk",
+                team.plans
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| format!(
+                        "surveyor {}: {} {}",
+                        i + 1,
+                        p.algorithm,
+                        p.termination.name()
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
         }
         println!(
