@@ -123,7 +123,7 @@ pub trait PlanListener: Send + Sync {
     fn on_progress(&self, progress: PlanProgress);
 }
 
-struct ListenerObserver(Arc<dyn PlanListener>);
+pub(crate) struct ListenerObserver(pub(crate) Arc<dyn PlanListener>);
 
 impl Observer for ListenerObserver {
     fn progress(&self, p: &Progress) {

@@ -1,11 +1,14 @@
 //! Several surveyors: team planning and survey bundles (export on one phone, import on
 //! another or on a desktop).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+
 use trailprint::plan::Control;
 use trailprint::store::{self as core_store, ExportOptions, StoreTeamRequest};
 use trailprint::team::SurveyorTask;
 
-use crate::plan::{PlanAlgorithm, core_settings};
+use crate::plan::{ListenerObserver, PlanAlgorithm, PlanListener, core_settings};
 use crate::store::TrailprintStore;
 use crate::{Result, TrailprintError};
 
@@ -57,6 +60,61 @@ pub struct TeamPlanSummary {
     pub utilities_nats: Vec<f64>,
     /// All the members' samples together, nats.
     pub team_utility_nats: f64,
+    /// The plan was cancelled ([`TeamPlanJob::cancel`]): the walks are what it had then,
+    /// a member not yet planned has the systematic walk.
+    pub cancelled: bool,
+    /// How each member's planning ended (`completed`, `time_limit`, `cancelled`, ...).
+    pub terminations: Vec<String>,
+}
+
+/// One team planning call: made by [`TrailprintStore::new_team_plan`], run once with
+/// [`TeamPlanJob::run`] (blocking; call it off the main thread), cancelled from any thread
+/// with [`TeamPlanJob::cancel`], which makes `run` return promptly with a walk for every
+/// member (the planning under way stops with its best walk so far, a member not yet
+/// planned gets the systematic walk), saved like any team plan.
+#[derive(uniffi::Object)]
+pub struct TeamPlanJob {
+    store: Arc<TrailprintStore>,
+    request: TeamPlanRequest,
+    cancel: Arc<AtomicBool>,
+    ran: Mutex<bool>,
+}
+
+#[uniffi::export]
+impl TeamPlanJob {
+    /// The request this call plans.
+    pub fn request(&self) -> TeamPlanRequest {
+        self.request.clone()
+    }
+
+    /// Plans and saves the team's walks, reporting each planning run's progress to
+    /// `listener` (its message names the member and the run: `surveyor 2/3, in turn: ...`).
+    /// Fails with `InvalidRequest` when run a second time.
+    pub fn run(&self, listener: Option<Arc<dyn PlanListener>>) -> Result<TeamPlanSummary> {
+        {
+            let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
+            if *ran {
+                return Err(TrailprintError::InvalidRequest(
+                    "this team plan call has already run; make a new one".into(),
+                ));
+            }
+            *ran = true;
+        }
+        let mut control = Control::new().with_cancel_token(self.cancel.clone());
+        if let Some(l) = listener {
+            control = control.with_observer(Arc::new(ListenerObserver(l)));
+        }
+        self.store.run_team_plan(&self.request, &control)
+    }
+
+    /// Asks the running (or future) `run` to stop; safe from any thread, idempotent.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::SeqCst);
+    }
+
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::SeqCst)
+    }
 }
 
 /// What importing a bundle did.
@@ -92,12 +150,14 @@ impl From<core_store::BundleImportReport> for BundleImportSummary {
     }
 }
 
-#[uniffi::export]
 impl TrailprintStore {
-    /// Plans walks for several surveyors that complement each other (conditioned on
-    /// everything already collected in the building) and saves one plan per member.
-    /// Blocking: call it off the main thread.
-    pub fn plan_team(&self, request: TeamPlanRequest) -> Result<TeamPlanSummary> {
+    /// Plans and saves a team (the body of [`TrailprintStore::plan_team`] and
+    /// [`TeamPlanJob::run`]): `Store::plan_team_and_save`.
+    fn run_team_plan(
+        &self,
+        request: &TeamPlanRequest,
+        control: &Control,
+    ) -> Result<TeamPlanSummary> {
         let req = StoreTeamRequest {
             members: request
                 .members
@@ -122,12 +182,39 @@ impl TrailprintStore {
         };
         let saved = self
             .inner
-            .plan_team_and_save(request.building_id, &req, &Control::new())?;
+            .plan_team_and_save(request.building_id, &req, control)?;
         Ok(TeamPlanSummary {
             plan_ids: saved.plan_ids,
             walks: saved.team.plans.iter().map(|p| p.walk.clone()).collect(),
             utilities_nats: saved.team.plans.iter().map(|p| p.utility_nats).collect(),
             team_utility_nats: saved.team.team_utility_nats,
+            cancelled: saved.team.cancelled,
+            terminations: saved
+                .team
+                .plans
+                .iter()
+                .map(|p| p.termination.name().to_string())
+                .collect(),
+        })
+    }
+}
+
+#[uniffi::export]
+impl TrailprintStore {
+    /// Plans walks for several surveyors that complement each other (conditioned on
+    /// everything already collected in the building) and saves one plan per member.
+    /// Blocking: call it off the main thread ([`TeamPlanJob`] for progress and cancel).
+    pub fn plan_team(&self, request: TeamPlanRequest) -> Result<TeamPlanSummary> {
+        self.run_team_plan(&request, &Control::new())
+    }
+
+    /// A team planning call for `request`, to run with [`TeamPlanJob::run`].
+    pub fn new_team_plan(self: Arc<Self>, request: TeamPlanRequest) -> Arc<TeamPlanJob> {
+        Arc::new(TeamPlanJob {
+            store: self,
+            request,
+            cancel: Arc::new(AtomicBool::new(false)),
+            ran: Mutex::new(false),
         })
     }
 

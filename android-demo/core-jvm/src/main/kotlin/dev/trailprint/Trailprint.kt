@@ -36,6 +36,25 @@ class RunningPlan internal constructor(val events: Flow<PlanEvent>, private val 
 }
 
 /**
+ * What a running team plan reports: each planning run's progress (its message names the
+ * member and the run, `surveyor 2/3, in turn: ...`), then exactly one [Done].
+ */
+sealed interface TeamPlanEvent {
+    data class Progress(val progress: PlanProgress) : TeamPlanEvent
+    data class Done(val team: TeamPlanSummary) : TeamPlanEvent
+}
+
+/** A team plan being computed: its [events] (collect once) and a [stop] that keeps the walks so far. */
+class RunningTeamPlan internal constructor(val events: Flow<TeamPlanEvent>, private val onStop: () -> Unit) {
+    /**
+     * Stops the team plan; [events] then ends with a walk for every member (the planning
+     * under way keeps its best walk, a member not yet planned gets the systematic walk),
+     * saved, with `cancelled` set.
+     */
+    fun stop() = onStop()
+}
+
+/**
  * The hand-written Kotlin face of Trailprint: suspend functions that run the (blocking)
  * native calls on [io], and planning as a cold [Flow] of [PlanEvent]s whose cancellation
  * cancels the native plan. Errors arrive as `TrailprintException` subclasses.
@@ -102,29 +121,68 @@ class Trailprint(
      */
     fun startPlan(request: PlanRequest): RunningPlan {
         val job = store.newPlan(request)
+        val (events, stop) = running(
+            run = { listener -> job.run(listener) },
+            cancelJob = job::cancel,
+            closeJob = job::close,
+            toProgress = { PlanEvent.Progress(it) },
+            toDone = { PlanEvent.Done(it) },
+        )
+        return RunningPlan(events, stop)
+    }
+
+    /**
+     * Starts planning a team and returns at once, as [startPlan] does for one walk:
+     * [RunningTeamPlan.stop] is the user's Cancel (the walks so far are saved and returned),
+     * cancelling the collecting coroutine stops the planner and drops the result.
+     */
+    fun startTeamPlan(request: TeamPlanRequest): RunningTeamPlan {
+        val job = store.newTeamPlan(request)
+        val (events, stop) = running(
+            run = { listener -> job.run(listener) },
+            cancelJob = job::cancel,
+            closeJob = job::close,
+            toProgress = { TeamPlanEvent.Progress(it) },
+            toDone = { TeamPlanEvent.Done(it) },
+        )
+        return RunningTeamPlan(events, stop)
+    }
+
+    /**
+     * A native planning call as a cold flow: [run] on [io] with a listener that forwards
+     * progress, then one [toDone] event. Closing the flow cancels the call and frees the
+     * native object once; the returned stop cancels it and lets the flow end with [toDone].
+     */
+    private fun <R, E> running(
+        run: (PlanListener) -> R,
+        cancelJob: () -> Unit,
+        closeJob: () -> Unit,
+        toProgress: (PlanProgress) -> E,
+        toDone: (R) -> E,
+    ): Pair<Flow<E>, () -> Unit> {
         val closed = java.util.concurrent.atomic.AtomicBoolean(false)
         val events = callbackFlow {
             val listener = object : PlanListener {
                 override fun onProgress(progress: PlanProgress) {
-                    trySend(PlanEvent.Progress(progress))
+                    trySend(toProgress(progress))
                 }
             }
             launch(io) {
                 try {
-                    val result = job.run(listener)
-                    send(PlanEvent.Done(result))
+                    val result = run(listener)
+                    send(toDone(result))
                     close()
                 } catch (e: Exception) {
                     close(e)
                 }
             }
             awaitClose {
-                job.cancel()
+                cancelJob()
                 // Safe while run() is still going: the native object lives until that call returns.
-                if (closed.compareAndSet(false, true)) job.close()
+                if (closed.compareAndSet(false, true)) closeJob()
             }
         }
-        return RunningPlan(events) { if (!closed.get()) job.cancel() }
+        return events to { if (!closed.get()) cancelJob() }
     }
 
     /** Starts a survey session on a saved plan. */

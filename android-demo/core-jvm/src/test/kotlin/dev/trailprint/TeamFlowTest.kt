@@ -20,7 +20,9 @@ import kotlin.test.assertFailsWith
 import kotlin.test.assertNotNull
 import kotlin.test.assertNull
 import kotlin.test.assertTrue
+import kotlinx.coroutines.flow.first
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 
 /** Issue 19: surveyors share bundles, a coordinator merges them and hands out team walks. */
 class TeamFlowTest : ScratchDir("trailprint-teamflow-test") {
@@ -120,6 +122,31 @@ class TeamFlowTest : ScratchDir("trailprint-teamflow-test") {
         inbox.open(file2.name, file2.readText()).join()
         assertEquals(team.summary.walks[1], inbox.state.value.received!!.plan.walk)
         carol.close()
+        desk.close()
+    }
+
+    @Test
+    fun theCoordinatorSeesTheTeamPlansProgressAndStopKeepsTheWalksSoFar() = runBlocking {
+        val desk = Trailprint.open(File(dir, "stop.db").path)
+        val bid = desk.importBuilding(TestData.demoBuildingJson, "demo").id
+        val coord = CoordinatorModel(desk, ExportFiles(File(dir, "stop-exports"), desk), this)
+        coord.selectBuilding(bid).join()
+        coord.setTeam(2, "c00", "c00", 300.0)
+        coord.setAlgorithm(PlanAlgorithm.EXACT) // branch and bound on 300 m: hours without the stop
+        val planning = coord.plan()
+        val line = withTimeout(60_000) {
+            coord.state.first { it.planProgress?.contains("team best") == true }.planProgress!!
+        }
+        assertTrue(line.startsWith("surveyor 1/2, in turn: "), line)
+        coord.stopPlanning()
+        withTimeout(30_000) { planning.join() }
+        val s = coord.state.value
+        assertNull(s.error)
+        assertNull(s.planProgress)
+        val team = s.team!!
+        assertTrue(team.summary.cancelled)
+        assertEquals(2, team.files.size)
+        assertTrue(team.assignments.all { it.walk.first() == "c00" && it.walk.last() == "c00" && it.lengthM <= 300.0 + 1e-9 })
         desk.close()
     }
 

@@ -15,8 +15,15 @@ import java.io.File
 import kotlin.test.Test
 import kotlin.test.assertEquals
 import kotlin.test.assertFailsWith
+import kotlin.test.assertIs
 import kotlin.test.assertTrue
+import kotlinx.coroutines.CompletableDeferred
+import kotlinx.coroutines.Dispatchers
+import kotlinx.coroutines.async
+import kotlinx.coroutines.flow.onEach
+import kotlinx.coroutines.flow.toList
 import kotlinx.coroutines.runBlocking
+import kotlinx.coroutines.withTimeout
 
 /** Issue 9 from the app's side: plan as one of a team, export and merge bundles. */
 class TeamTest : ScratchDir("trailprint-team-test") {
@@ -47,6 +54,46 @@ class TeamTest : ScratchDir("trailprint-team-test") {
             val mine = store.getPlan(together.planIds[1])
             assertEquals(together.walks[1], mine.walk)
             store.startSession(mine.id, defaultHumanProfile(), null).close()
+        }
+    }
+
+    @Test
+    fun stoppingATeamPlanKeepsAWalkForEveryMemberAndSavesThem() = runBlocking {
+        Trailprint.inMemory(Dispatchers.IO).use { api ->
+            val bid = api.importBuilding(TestData.demoBuildingJson, "demo").id
+            val members = listOf(TeamMember("c00", "c00", 300.0), TeamMember("c10", "c10", 300.0))
+            // Branch and bound on 300 m: hours without the stop.
+            val running = api.startTeamPlan(
+                TeamPlanRequest(bid, members, defaultRobotProfile(), PlanAlgorithm.EXACT, 1uL, null, false),
+            )
+            // Stop once the first member's planner has reported a best walk.
+            val best = CompletableDeferred<Unit>()
+            val events = async(Dispatchers.Default) {
+                running.events.onEach {
+                    if (it is TeamPlanEvent.Progress && it.progress.bestUtilityNats != null) best.complete(Unit)
+                }.toList()
+            }
+            withTimeout(60_000) { best.await() }
+            running.stop()
+            val all = withTimeout(30_000) { events.await() }
+            val team = assertIs<TeamPlanEvent.Done>(all.last()).team
+            assertTrue(team.cancelled)
+            assertEquals(listOf("cancelled", "cancelled"), team.terminations)
+            assertEquals(2, team.planIds.size)
+            members.forEachIndexed { i, m ->
+                val plan = api.plan(team.planIds[i])
+                assertEquals(team.walks[i], plan.walk)
+                assertEquals(m.start, plan.walk.first())
+                assertEquals(m.end, plan.walk.last())
+                assertTrue(plan.lengthM <= m.budgetM + 1e-9 && plan.utilityNats > 0.0, "$plan")
+            }
+            // The second member, never reached, has the systematic walk: 300 m is more than
+            // every edge of this building, which that walk then walks.
+            val walked = team.walks[1].zipWithNext { a, b -> setOf(a, b) }.toSet()
+            val edges = api.map(bid).edges.map { setOf(it.a, it.b) }.toSet()
+            assertEquals(edges, walked)
+            val messages = all.filterIsInstance<TeamPlanEvent.Progress>().map { it.progress.message }
+            assertTrue(messages.any { it.startsWith("surveyor 1/2, in turn: ") }, "$messages")
         }
     }
 

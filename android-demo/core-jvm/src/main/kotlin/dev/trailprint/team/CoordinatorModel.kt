@@ -1,6 +1,8 @@
 package dev.trailprint.team
 
 import dev.trailprint.AppException
+import dev.trailprint.RunningTeamPlan
+import dev.trailprint.TeamPlanEvent
 import dev.trailprint.Trailprint
 import dev.trailprint.files.ExportFiles
 import dev.trailprint.files.ShareableFile
@@ -8,6 +10,7 @@ import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.BuildingSummary
 import dev.trailprint.ffi.BundleImportSummary
 import dev.trailprint.ffi.PlanAlgorithm
+import dev.trailprint.ffi.PlanProgress
 import dev.trailprint.ffi.SurveyorProfile
 import dev.trailprint.ffi.TeamMember
 import dev.trailprint.ffi.TeamPlanRequest
@@ -80,6 +83,8 @@ data class CoordinatorState(
     val members: List<MemberSpec> = emptyList(),
     val algorithm: PlanAlgorithm = PlanAlgorithm.AUTO,
     val busy: Boolean = false,
+    /** While the team is planned: which member and run, and the team's best so far. */
+    val planProgress: String? = null,
     val team: TeamResult? = null,
     /** The file to share now (the screen starts the share sheet and calls [CoordinatorModel.shared]). */
     val share: ShareableFile? = null,
@@ -113,6 +118,9 @@ class CoordinatorModel(
     private val timeLimitS: Double? = null,
 ) {
     private val _state = MutableStateFlow(CoordinatorState())
+
+    /** The team plan under way, for [stopPlanning]. */
+    @Volatile private var planning: RunningTeamPlan? = null
     val state: StateFlow<CoordinatorState> = _state.asStateFlow()
 
     fun refresh() = busy { _state.update { it.copy(buildings = api.buildings()) } }
@@ -181,9 +189,23 @@ class CoordinatorModel(
             if (!(m.budgetM > 0)) throw AppException("surveyor ${i + 1}: budget must be a positive number of metres, got ${m.budgetM}")
         }
         val building = s.building ?: api.buildings().first { it.id == bid }
-        val team = api.planTeam(
+        val running = api.startTeamPlan(
             TeamPlanRequest(bid, s.members.map { TeamMember(it.start, it.end, it.budgetM) }, surveyor, s.algorithm, seed, timeLimitS, false),
         )
+        planning = running
+        var result: TeamPlanSummary? = null
+        try {
+            running.events.collect { e ->
+                when (e) {
+                    is TeamPlanEvent.Progress -> _state.update { it.copy(planProgress = progressLine(e.progress)) }
+                    is TeamPlanEvent.Done -> result = e.team
+                }
+            }
+        } finally {
+            planning = null
+            _state.update { it.copy(planProgress = null) }
+        }
+        val team = checkNotNull(result) { "the team plan ended without its result" }
         // One carrier session per plan, so that the bundle carries the plans (see WalkFiles).
         withContext(io) {
             team.planIds.forEachIndexed { i, planId ->
@@ -214,6 +236,14 @@ class CoordinatorModel(
         _state.update { it.copy(team = TeamResult(label, team, assignments, files), buildings = api.buildings()) }
     }
 
+    /**
+     * Stops the team plan under way, as a user's Stop: the walks it has are kept (a member
+     * not yet planned gets the systematic walk), saved and written as walk files.
+     */
+    fun stopPlanning() {
+        planning?.stop()
+    }
+
     fun share(file: ShareableFile) = _state.update { it.copy(share = file) }
 
     fun shared() = _state.update { it.copy(share = null) }
@@ -222,6 +252,9 @@ class CoordinatorModel(
 
     /** Shows an error from outside the store (a shared file that could not be read). */
     fun reportError(message: String) = _state.update { it.copy(error = message) }
+
+    private fun progressLine(p: PlanProgress): String =
+        p.message + (p.bestUtilityNats?.let { " · team best %.1f nats".format(it) } ?: "")
 
     private fun busy(block: suspend () -> Unit) = scope.launch { _state.runBusy({ copy(busy = it) }, { copy(error = it) }, block) }
 }

@@ -106,6 +106,12 @@ fun TeamScreen(vm: TeamViewModel = viewModel()) {
             },
             enabled = !s.busy && s.buildingId != null && start != null && end != null && n != null && n in 1..50 && b != null && b > 0,
         ) { Text("Plan the team's walks") }
+        s.planProgress?.let { line ->
+            Row(horizontalArrangement = Arrangement.spacedBy(8.dp)) {
+                Text(line, Modifier.weight(1f), style = MaterialTheme.typography.bodySmall)
+                OutlinedButton(onClick = m::stopPlanning) { Text("Stop") }
+            }
+        }
         s.team?.let { t ->
             Text(t.label, style = MaterialTheme.typography.titleMedium)
             Text("Team: %.2f nats together".format(t.summary.teamUtilityNats))
