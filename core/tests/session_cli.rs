@@ -109,16 +109,18 @@ fn bad_options_fail_with_a_message() {
     assert_eq!(out.status.code(), Some(2), "--surveyor is required");
 }
 
-/// A building whose dense survey is too large for the simulated world (a GP on 6,000
-/// points would take 550 MiB) is refused with the count and the size, before a plan is
-/// made: the database gets no plan and no session.
+/// A building whose dense survey is too large for the simulated world (a GP on one point
+/// more than `max_fit_points`, 8,177 points, would take more than 512 MiB) is refused with
+/// the count and the size, before a plan is made: the database gets no plan and no session.
 #[test]
 fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
     let dir = tempfile::tempdir().expect("dir");
     let db = dir.path().join("s.db");
     let file = dir.path().join("dense.json");
-    let dense: Vec<String> = (0..6000)
-        .map(|i| format!(r#"{{"x":{},"y":0,"rss":{{"ap":-60}}}}"#, i as f64 * 0.005))
+    let n = trailprint::gp::predict::max_fit_points() + 1;
+    let mib = trailprint::gp::predict::fit_bytes(n).div_ceil(1 << 20);
+    let dense: Vec<String> = (0..n)
+        .map(|i| format!(r#"{{"x":{},"y":0,"rss":{{"ap":-60}}}}"#, i as f64 * 0.003))
         .collect();
     let text = format!(
         r#"{{"format":"survey-building/1","name":"dense line",
@@ -149,8 +151,8 @@ fn a_dense_survey_too_large_for_the_world_model_is_refused_before_planning() {
     assert!(!out.status.success());
     assert!(
         err.contains("\"dense line\"")
-            && err.contains("6000 dense_survey points")
-            && err.contains("need about 550 MiB"),
+            && err.contains(&format!("{n} dense_survey points"))
+            && err.contains(&format!("need about {mib} MiB")),
         "{err}"
     );
     let plans = run_ok(&db, &["plans"]);

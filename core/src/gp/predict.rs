@@ -29,31 +29,38 @@
 //! # Ok::<(), trailprint::Error>(())
 //! ```
 
-use nalgebra::{Cholesky, DMatrix, Dyn};
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use super::{Kernel, Point};
+use crate::utility::dense::{self, Layout};
+use crate::utility::simd::Isa;
 use crate::{Error, Result};
 
 /// Query points handled per parallel task in [`GpModel::predict`].
 const CHUNK: usize = 256;
 
-/// Most memory a fitted model may take, bytes: a fit holds two `n x n` matrices (the
-/// Cholesky factor and its lower triangle, [`GpModel::l`]), 16 `n^2` bytes, so at most
-/// 5,792 training points. Beyond that a fit is refused before it allocates: the
-/// generated 3,161-vertex floor's dense survey (23,121 points) took 4.3 GB and did not
-/// finish its factorisation in 15 minutes as the world model of `simulate`. The same
-/// default as a plan's memory budget ([`crate::plan::DEFAULT_MEMORY_BUDGET`]).
+/// Most memory a fit may take, bytes: the factorisation's buffer, about `8 n^2` bytes
+/// ([`fit_bytes`]), which then holds the model's factor `L` ([`GpModel::l`]), so at most
+/// 8,176 training points. Beyond that a fit is refused before it allocates: the generated
+/// 3,161-vertex floor's dense survey (23,121 points) took 4.3 GB and did not finish its
+/// factorisation in 15 minutes as the world model of `simulate`. The same default as a
+/// plan's memory budget ([`crate::plan::DEFAULT_MEMORY_BUDGET`]).
 pub const FIT_MEMORY_BUDGET: u64 = crate::plan::DEFAULT_MEMORY_BUDGET;
+
+/// Bytes a fit of `n` training points allocates for its factorisation.
+pub fn fit_bytes(n: usize) -> u64 {
+    8 * Layout::new(n).len() as u64
+}
 
 /// A fitted posterior: one Cholesky factor for all outputs.
 #[derive(Debug, Clone)]
 pub struct GpModel {
     kernel: Kernel,
     train: Vec<Point>,
-    /// `None` when there are no training points (the posterior is the prior).
-    chol: Option<Cholesky<f64, Dyn>>,
-    /// Lower factor `L` (zeros above the diagonal), kept for the variance solves.
+    /// `ln det(K + N)` (0 without training points).
+    ln_det: f64,
+    /// Lower Cholesky factor `L` of `K + N` (zeros above the diagonal), for the solves.
     l: DMatrix<f64>,
     /// `(K + N)⁻¹ (Y - m)`, one column per output.
     alpha: DMatrix<f64>,
@@ -105,14 +112,15 @@ impl GpModel {
                 "GP fit: training value {v} is not finite"
             )));
         }
-        let need = 16.0 * (n as f64).powi(2);
-        if need > FIT_MEMORY_BUDGET as f64 {
+        let need = fit_bytes(n);
+        if need > FIT_MEMORY_BUDGET {
             return Err(Error::InvalidRequest(format!(
-                "GP fit: {n} training points need about {} MiB (two {n} x {n} matrices), more \
-                 than the {} MiB a fit may take; use at most 5,792 points (a part of the \
+                "GP fit: {n} training points need about {} MiB (an {n} x {n} factor), more \
+                 than the {} MiB a fit may take; use at most {} points (a part of the \
                  building, or fewer samples)",
-                (need / (1u64 << 20) as f64).ceil(),
-                FIT_MEMORY_BUDGET >> 20
+                need.div_ceil(1 << 20),
+                FIT_MEMORY_BUDGET >> 20,
+                max_fit_points()
             )));
         }
         let m = values.ncols();
@@ -129,38 +137,39 @@ impl GpModel {
             return Ok(GpModel {
                 kernel: *kernel,
                 train: Vec::new(),
-                chol: None,
+                ln_det: 0.0,
                 l: DMatrix::zeros(0, 0),
                 alpha: DMatrix::zeros(0, m),
                 means,
             });
         }
-        let mut k = DMatrix::from_fn(n, n, |i, j| kernel.k(&train[i], &train[j]));
-        for (i, &s) in noise.iter().enumerate() {
-            if !s.is_finite() || s < 0.0 {
-                return Err(Error::InvalidRequest(format!(
-                    "GP fit: noise variance {s} at training point {i} must be finite and >= 0"
-                )));
-            }
-            k[(i, i)] += s;
+        if let Some((i, s)) = noise
+            .iter()
+            .enumerate()
+            .find(|(_, s)| !s.is_finite() || **s < 0.0)
+        {
+            return Err(Error::InvalidRequest(format!(
+                "GP fit: noise variance {s} at training point {i} must be finite and >= 0"
+            )));
         }
-        let chol = Cholesky::new(k).ok_or_else(|| {
+        let (l, ln_det) = factor(kernel, train, noise).ok_or_else(|| {
             Error::Numerical(format!(
                 "GP fit: covariance of {n} training points is not positive definite \
                  (kernel sf2={}, ell={}, sn2={})",
                 kernel.sf2, kernel.ell, kernel.sn2
             ))
         })?;
-        let mut centred = values.clone();
+        let mut alpha = values.clone();
         for (a, &mu) in means.iter().enumerate() {
-            centred.column_mut(a).add_scalar_mut(-mu);
+            alpha.column_mut(a).add_scalar_mut(-mu);
         }
-        let alpha = chol.solve(&centred);
-        let l = chol.l();
+        // (K + N)^-1 (Y - m) = L^-T L^-1 (Y - m); L has a positive diagonal.
+        l.solve_lower_triangular_unchecked_mut(&mut alpha);
+        l.tr_solve_lower_triangular_unchecked_mut(&mut alpha);
         Ok(GpModel {
             kernel: *kernel,
             train: train.to_vec(),
-            chol: Some(chol),
+            ln_det,
             l,
             alpha,
             means,
@@ -189,7 +198,7 @@ impl GpModel {
 
     /// `ln det(K + N)` of the training covariance (0 without training points).
     pub fn ln_det(&self) -> f64 {
-        self.chol.as_ref().map_or(0.0, |c| c.ln_determinant())
+        self.ln_det
     }
 
     /// Cross-covariance `K(query, train)`, one row per query point.
@@ -271,6 +280,57 @@ impl GpModel {
     }
 }
 
+/// Most training points a fit takes within [`FIT_MEMORY_BUDGET`].
+pub fn max_fit_points() -> usize {
+    let (mut lo, mut hi) = (0usize, 1usize << 20);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if fit_bytes(mid) <= FIT_MEMORY_BUDGET {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    lo
+}
+
+/// The lower Cholesky factor `L` of `K + N` (`n x n`, zeros above the diagonal) and
+/// `ln det(K + N)`, or `None` when it is not positive definite.
+///
+/// By the engine's blocked factorisation ([`dense::factor`]) rather than nalgebra's
+/// `Cholesky`: a `simulate` world model is a fit on a building's whole dense survey
+/// (3,817 points on the generated mall), where nalgebra took 4.2 s of a 6.7 s run and
+/// held the factor twice (see `docs/decisions/0008-gp-fit-factorisation.md`). Its upper
+/// factor `U` (row-major, `U^T U = K + N`) read column-major is `L`: each row of `U`
+/// becomes a column of `L` in place, so the fit holds one `n x n` matrix.
+fn factor(kernel: &Kernel, train: &[Point], noise: &[f64]) -> Option<(DMatrix<f64>, f64)> {
+    let n = train.len();
+    let layout = Layout::new(n);
+    let ld = layout.ld;
+    let mut a = vec![0.0; layout.len()];
+    // Row i of the upper triangle: k(x_i, x_j) for j >= i, noise on the diagonal.
+    a.par_chunks_mut(ld)
+        .take(n)
+        .enumerate()
+        .for_each(|(i, row)| {
+            for j in i..n {
+                row[j] = kernel.k(&train[i], &train[j]);
+            }
+            row[i] += noise[i];
+        });
+    let ln_det = dense::factor(Isa::detect(), &mut a, layout, 0)?;
+    // Row i of U, read column-major, is column i of L (rows i..n); what lies before the
+    // diagonal in it is not part of the factor. Columns move down to stride n in order,
+    // each to an offset at most its own.
+    for c in 0..n {
+        a.copy_within(c * ld..c * ld + n, c * n);
+        a[c * n..c * n + c].fill(0.0);
+    }
+    a.truncate(n * n);
+    a.shrink_to_fit();
+    Some((DMatrix::from_vec(n, n, a), ln_det))
+}
+
 /// Stacks row blocks (all with `m` columns) into one `rows x m` matrix.
 fn stack_rows(blocks: &[DMatrix<f64>], rows: usize, m: usize) -> DMatrix<f64> {
     let mut out = DMatrix::zeros(rows, m);
@@ -291,20 +351,79 @@ mod tests {
     }
 
     /// A fit too large for [`FIT_MEMORY_BUDGET`] is refused with the count and the size,
-    /// before its matrices are allocated (5,793 points would take 512 MiB and more).
+    /// before its matrix is allocated; the largest that fits is named.
     #[test]
     fn a_fit_beyond_the_memory_budget_is_refused_with_its_size() {
         let k = Kernel::new(20.0, 4.0, 2.0);
-        let n = 5_793;
+        let most = max_fit_points();
+        assert!(fit_bytes(most) <= FIT_MEMORY_BUDGET && fit_bytes(most + 1) > FIT_MEMORY_BUDGET);
+        let n = most + 1;
         let train: Vec<Point> = (0..n).map(|i| Point::new(i as f64, 0.0, 0)).collect();
         let e = GpModel::fit(&k, &train, &DMatrix::zeros(n, 1)).expect_err("too large");
         let msg = e.to_string();
+        let mib = fit_bytes(n).div_ceil(1 << 20);
         assert!(
-            msg.contains("5793 training points need about 513 MiB"),
+            msg.contains(&format!("{n} training points need about {mib} MiB"))
+                && msg.contains(&format!("use at most {most} points")),
             "{msg}"
         );
-        // One point fewer fits the budget (checked on the estimate, not by fitting).
-        assert!(16.0 * (5_792f64).powi(2) <= FIT_MEMORY_BUDGET as f64);
+    }
+
+    /// The factor, the solves and the log-determinant agree with nalgebra's Cholesky on a
+    /// fit large enough for the factorisation's chunked path (more than 1,024 points).
+    #[test]
+    fn the_fit_agrees_with_nalgebras_cholesky() {
+        let k = Kernel::new(180.0, 9.0, 2.5);
+        let n = 1_100;
+        let train: Vec<Point> = (0..n)
+            .map(|i| {
+                Point::new(
+                    (i % 40) as f64 * 1.3,
+                    (i / 40) as f64 * 1.7,
+                    (i % 3 == 0) as i64,
+                )
+            })
+            .collect();
+        let noise: Vec<f64> = (0..n).map(|i| 2.5 + (i % 7) as f64 * 0.3).collect();
+        let values = DMatrix::from_fn(n, 3, |i, a| -55.0 - ((i * 31 + a * 17) % 41) as f64);
+        let gp = GpModel::fit_with_noise(&k, &train, &noise, &values).expect("fit");
+        let mut km = DMatrix::from_fn(n, n, |i, j| k.k(&train[i], &train[j]));
+        for i in 0..n {
+            km[(i, i)] += noise[i];
+        }
+        let chol = nalgebra::Cholesky::new(km).expect("pd");
+        let rel = |a: f64, b: f64| (a - b).abs() / (1.0 + a.abs().max(b.abs()));
+        assert!(rel(gp.ln_det(), chol.ln_determinant()) < 1e-11);
+        assert!((&gp.l - chol.l()).amax() < 1e-10);
+        let queries: Vec<Point> = (0..50)
+            .map(|i| Point::new(i as f64 * 1.1, 7.3, i % 2))
+            .collect();
+        let p = gp.predict(&queries);
+        // The reference: means from (K + N)^-1 (Y - m), variances from L^-1 k.
+        let mut centred = values.clone();
+        for a in 0..3 {
+            let mu = centred.column(a).mean();
+            centred.column_mut(a).add_scalar_mut(-mu);
+        }
+        let alpha = chol.solve(&centred);
+        for (q, x) in queries.iter().enumerate() {
+            let kq = DMatrix::from_fn(n, 1, |i, _| k.k(&train[i], x));
+            for a in 0..3 {
+                let mean = values.column(a).mean() + kq.column(0).dot(&alpha.column(a));
+                assert!(
+                    rel(p.mean[(q, a)], mean) < 1e-9,
+                    "{} vs {mean}",
+                    p.mean[(q, a)]
+                );
+            }
+            let v = chol.l().solve_lower_triangular(&kq).expect("solve");
+            let var = (k.sf2 - v.norm_squared()).max(0.0);
+            assert!(
+                (p.variance[q] - var).abs() < 1e-8 * k.sf2,
+                "{} vs {var}",
+                p.variance[q]
+            );
+        }
     }
 
     #[test]
