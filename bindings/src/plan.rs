@@ -123,7 +123,7 @@ pub trait PlanListener: Send + Sync {
     fn on_progress(&self, progress: PlanProgress);
 }
 
-pub(crate) struct ListenerObserver(pub(crate) Arc<dyn PlanListener>);
+struct ListenerObserver(Arc<dyn PlanListener>);
 
 impl Observer for ListenerObserver {
     fn progress(&self, p: &Progress) {
@@ -139,8 +139,7 @@ impl Observer for ListenerObserver {
 pub struct PlanJob {
     store: Arc<TrailprintStore>,
     request: PlanRequest,
-    cancel: Arc<AtomicBool>,
-    ran: Mutex<bool>,
+    job: JobControl,
 }
 
 impl PlanJob {
@@ -148,9 +147,47 @@ impl PlanJob {
         PlanJob {
             store,
             request,
-            cancel: Arc::new(AtomicBool::new(false)),
-            ran: Mutex::new(false),
+            job: JobControl::default(),
         }
+    }
+}
+
+/// What a planning call object ([`PlanJob`], [`crate::team::TeamPlanJob`]) holds to run
+/// once and be cancelled from any thread.
+#[derive(Default)]
+pub(crate) struct JobControl {
+    cancel: Arc<AtomicBool>,
+    ran: Mutex<bool>,
+}
+
+impl JobControl {
+    /// The control of the one run: fails with `InvalidRequest` naming `what` when the
+    /// call has run before; progress goes to `listener`.
+    pub(crate) fn start(
+        &self,
+        what: &str,
+        listener: Option<Arc<dyn PlanListener>>,
+    ) -> Result<Control> {
+        let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
+        if *ran {
+            return Err(TrailprintError::InvalidRequest(format!(
+                "this {what} call has already run; make a new one"
+            )));
+        }
+        *ran = true;
+        let control = Control::new().with_cancel_token(self.cancel.clone());
+        Ok(match listener {
+            Some(l) => control.with_observer(Arc::new(ListenerObserver(l))),
+            None => control,
+        })
+    }
+
+    pub(crate) fn cancel(&self) {
+        self.cancel.store(true, Ordering::SeqCst);
+    }
+
+    pub(crate) fn is_cancelled(&self) -> bool {
+        self.cancel.load(Ordering::SeqCst)
     }
 }
 
@@ -165,33 +202,22 @@ impl PlanJob {
     /// [`cancel`](Self::cancel) it returns the best walk so far (`termination` =
     /// `cancelled`); fails with `InvalidRequest` when run a second time.
     pub fn run(&self, listener: Option<Arc<dyn PlanListener>>) -> Result<PlanSummary> {
-        {
-            let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
-            if *ran {
-                return Err(TrailprintError::InvalidRequest(
-                    "this plan call has already run; make a new one".into(),
-                ));
-            }
-            *ran = true;
-        }
         // The time limit counts from here: the store's kernel fit and loading the
         // building are part of what the app waits for.
-        let mut control = Control::new()
-            .with_cancel_token(self.cancel.clone())
+        let control = self
+            .job
+            .start("plan", listener)?
             .with_clock_from(std::time::Instant::now());
-        if let Some(l) = listener {
-            control = control.with_observer(Arc::new(ListenerObserver(l)));
-        }
         self.store.run_plan(&self.request, &control)
     }
 
     /// Asks the running (or future) `run` to stop; safe from any thread, idempotent.
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::SeqCst);
+        self.job.cancel();
     }
 
     pub fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::SeqCst)
+        self.job.is_cancelled()
     }
 }
 

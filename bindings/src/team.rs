@@ -1,14 +1,13 @@
 //! Several surveyors: team planning and survey bundles (export on one phone, import on
 //! another or on a desktop).
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::Arc;
 
 use trailprint::plan::Control;
 use trailprint::store::{self as core_store, ExportOptions, StoreTeamRequest};
 use trailprint::team::SurveyorTask;
 
-use crate::plan::{ListenerObserver, PlanAlgorithm, PlanListener, core_settings};
+use crate::plan::{JobControl, PlanAlgorithm, PlanListener, core_settings};
 use crate::store::TrailprintStore;
 use crate::{Result, TrailprintError};
 
@@ -76,8 +75,7 @@ pub struct TeamPlanSummary {
 pub struct TeamPlanJob {
     store: Arc<TrailprintStore>,
     request: TeamPlanRequest,
-    cancel: Arc<AtomicBool>,
-    ran: Mutex<bool>,
+    job: JobControl,
 }
 
 #[uniffi::export]
@@ -91,29 +89,17 @@ impl TeamPlanJob {
     /// `listener` (its message names the member and the run: `surveyor 2/3, in turn: ...`).
     /// Fails with `InvalidRequest` when run a second time.
     pub fn run(&self, listener: Option<Arc<dyn PlanListener>>) -> Result<TeamPlanSummary> {
-        {
-            let mut ran = self.ran.lock().unwrap_or_else(PoisonError::into_inner);
-            if *ran {
-                return Err(TrailprintError::InvalidRequest(
-                    "this team plan call has already run; make a new one".into(),
-                ));
-            }
-            *ran = true;
-        }
-        let mut control = Control::new().with_cancel_token(self.cancel.clone());
-        if let Some(l) = listener {
-            control = control.with_observer(Arc::new(ListenerObserver(l)));
-        }
+        let control = self.job.start("team plan", listener)?;
         self.store.run_team_plan(&self.request, &control)
     }
 
     /// Asks the running (or future) `run` to stop; safe from any thread, idempotent.
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::SeqCst);
+        self.job.cancel();
     }
 
     pub fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::SeqCst)
+        self.job.is_cancelled()
     }
 }
 
@@ -213,8 +199,7 @@ impl TrailprintStore {
         Arc::new(TeamPlanJob {
             store: self,
             request,
-            cancel: Arc::new(AtomicBool::new(false)),
-            ran: Mutex::new(false),
+            job: JobControl::default(),
         })
     }
 

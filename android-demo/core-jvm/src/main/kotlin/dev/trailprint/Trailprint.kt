@@ -119,16 +119,9 @@ class Trailprint(
      * carrying the best walk found so far (termination "cancelled"), saved like any plan.
      * Cancelling the collecting coroutine instead stops the planner and drops the result.
      */
-    fun startPlan(request: PlanRequest): RunningPlan {
-        val job = store.newPlan(request)
-        val (events, stop) = running(
-            run = { listener -> job.run(listener) },
-            cancelJob = job::cancel,
-            closeJob = job::close,
-            toProgress = { PlanEvent.Progress(it) },
-            toDone = { PlanEvent.Done(it) },
-        )
-        return RunningPlan(events, stop)
+    fun startPlan(request: PlanRequest): RunningPlan = store.newPlan(request).let { job ->
+        val (events, stop) = running(job::run, job::cancel, job::close, PlanEvent::Progress, PlanEvent::Done)
+        RunningPlan(events, stop)
     }
 
     /**
@@ -136,16 +129,9 @@ class Trailprint(
      * [RunningTeamPlan.stop] is the user's Cancel (the walks so far are saved and returned),
      * cancelling the collecting coroutine stops the planner and drops the result.
      */
-    fun startTeamPlan(request: TeamPlanRequest): RunningTeamPlan {
-        val job = store.newTeamPlan(request)
-        val (events, stop) = running(
-            run = { listener -> job.run(listener) },
-            cancelJob = job::cancel,
-            closeJob = job::close,
-            toProgress = { TeamPlanEvent.Progress(it) },
-            toDone = { TeamPlanEvent.Done(it) },
-        )
-        return RunningTeamPlan(events, stop)
+    fun startTeamPlan(request: TeamPlanRequest): RunningTeamPlan = store.newTeamPlan(request).let { job ->
+        val (events, stop) = running(job::run, job::cancel, job::close, TeamPlanEvent::Progress, TeamPlanEvent::Done)
+        RunningTeamPlan(events, stop)
     }
 
     /**
@@ -154,7 +140,7 @@ class Trailprint(
      * native object once; the returned stop cancels it and lets the flow end with [toDone].
      */
     private fun <R, E> running(
-        run: (PlanListener) -> R,
+        run: (PlanListener?) -> R,
         cancelJob: () -> Unit,
         closeJob: () -> Unit,
         toProgress: (PlanProgress) -> E,
