@@ -654,6 +654,83 @@ fn team_plan_keeps_its_walks_as_plans() {
     }
 }
 
+/// `plan --progress` writes its progress to stderr only, and Ctrl-C during a long plan
+/// prints the best walk so far as the result (`termination: cancelled`), saved.
+#[test]
+fn plan_shows_progress_and_ctrl_c_returns_the_best_walk_so_far_saved() {
+    use std::io::{BufRead, Read};
+    let (_dir, db, name) = demo_db();
+    // Branch and bound on 120 m of the demo building: far longer than the test without
+    // the interrupt.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
+        .arg("--db")
+        .arg(&db)
+        .args([
+            "plan",
+            "--building",
+            &name,
+            "--start",
+            "f0-c00",
+            "--end",
+            "f0-c00",
+            "--budget",
+            "120",
+            "--algorithm",
+            "exact",
+            "--time-limit",
+            "600",
+            "--progress",
+            "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let started = std::time::Instant::now();
+    let mut err = std::io::BufReader::new(child.stderr.take().expect("stderr"));
+    // Wait for a report that carries a best walk.
+    let mut line = String::new();
+    while !line.contains(" nats") {
+        line.clear();
+        assert!(
+            err.read_line(&mut line).expect("stderr") > 0,
+            "no progress with a best walk"
+        );
+        assert!(line.starts_with("planning "), "{line}");
+    }
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let mut rest = String::new();
+    err.read_to_string(&mut rest).expect("stderr");
+    let mut out = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut out)
+        .expect("stdout");
+    assert!(child.wait().expect("wait").success(), "{rest}");
+    assert!(started.elapsed() < std::time::Duration::from_secs(60));
+    assert!(
+        rest.contains("interrupted: stopping with the best walk so far"),
+        "{rest}"
+    );
+    assert_eq!(out.lines().count(), 1, "{out}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
+    assert_eq!(v["termination"], "cancelled", "{v}");
+    let walk = v["walk"].as_array().expect("walk");
+    assert!(walk.len() > 2 && walk[0] == "f0-c00" && walk[walk.len() - 1] == "f0-c00");
+    assert!(v["length_m"].as_f64().expect("length") <= 120.0 + 1e-9);
+    let stored = trailprint::Store::open(&db)
+        .expect("open")
+        .load_plan(v["plan_id"].as_i64().expect("plan id"))
+        .expect("plan");
+    assert_eq!(serde_json::json!(stored.record.walk), v["walk"]);
+}
+
 /// `team-plan --progress` shows each run's progress on stderr (stdout stays one JSON
 /// object), and Ctrl-C stops the team plan with a walk for every surveyor, saved.
 #[test]
