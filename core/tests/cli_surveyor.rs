@@ -654,18 +654,71 @@ fn team_plan_keeps_its_walks_as_plans() {
     }
 }
 
+/// Runs `trailprint --db db ARGS` (with `--progress --json`), reads its stderr until
+/// `until` holds for a progress line, interrupts it (SIGINT, as Ctrl-C) and waits. Checks
+/// what every interrupted planning command does: each stderr line before is a progress
+/// line, the process says it stops with the best so far, exits 0 within `within`, and
+/// prints one JSON line on stdout, which is returned.
+fn interrupted(
+    db: &Path,
+    args: &[&str],
+    until: impl Fn(&str) -> bool,
+    within: std::time::Duration,
+) -> serde_json::Value {
+    use std::io::{BufRead, Read};
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
+        .arg("--db")
+        .arg(db)
+        .args(args)
+        .args(["--progress", "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let started = std::time::Instant::now();
+    let mut err = std::io::BufReader::new(child.stderr.take().expect("stderr"));
+    let mut line = String::new();
+    loop {
+        line.clear();
+        assert!(
+            err.read_line(&mut line).expect("stderr") > 0,
+            "no such progress line"
+        );
+        assert!(line.starts_with("planning "), "{line}");
+        if until(&line) {
+            break;
+        }
+    }
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let mut rest = String::new();
+    err.read_to_string(&mut rest).expect("stderr");
+    let mut out = String::new();
+    let mut stdout = child.stdout.take().expect("stdout");
+    stdout.read_to_string(&mut out).expect("stdout");
+    assert!(child.wait().expect("wait").success(), "{line}{rest}");
+    assert!(started.elapsed() < within, "took {:?}", started.elapsed());
+    assert!(
+        rest.contains("interrupted: stopping with the best walk so far"),
+        "{rest}"
+    );
+    assert_eq!(out.lines().count(), 1, "{out}");
+    serde_json::from_str(out.trim()).expect("json")
+}
+
 /// `plan --progress` writes its progress to stderr only, and Ctrl-C during a long plan
 /// prints the best walk so far as the result (`termination: cancelled`), saved.
 #[test]
 fn plan_shows_progress_and_ctrl_c_returns_the_best_walk_so_far_saved() {
-    use std::io::{BufRead, Read};
     let (_dir, db, name) = demo_db();
     // Branch and bound on 120 m of the demo building: far longer than the test without
-    // the interrupt.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
-        .arg("--db")
-        .arg(&db)
-        .args([
+    // the interrupt. Interrupted once a report carries a best walk.
+    let v = interrupted(
+        &db,
+        &[
             "plan",
             "--building",
             &name,
@@ -679,47 +732,10 @@ fn plan_shows_progress_and_ctrl_c_returns_the_best_walk_so_far_saved() {
             "exact",
             "--time-limit",
             "600",
-            "--progress",
-            "--json",
-        ])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let started = std::time::Instant::now();
-    let mut err = std::io::BufReader::new(child.stderr.take().expect("stderr"));
-    // Wait for a report that carries a best walk.
-    let mut line = String::new();
-    while !line.contains(" nats") {
-        line.clear();
-        assert!(
-            err.read_line(&mut line).expect("stderr") > 0,
-            "no progress with a best walk"
-        );
-        assert!(line.starts_with("planning "), "{line}");
-    }
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill");
-    assert!(killed.success());
-    let mut rest = String::new();
-    err.read_to_string(&mut rest).expect("stderr");
-    let mut out = String::new();
-    child
-        .stdout
-        .take()
-        .expect("stdout")
-        .read_to_string(&mut out)
-        .expect("stdout");
-    assert!(child.wait().expect("wait").success(), "{rest}");
-    assert!(started.elapsed() < std::time::Duration::from_secs(60));
-    assert!(
-        rest.contains("interrupted: stopping with the best walk so far"),
-        "{rest}"
+        ],
+        |line| line.contains(" nats"),
+        std::time::Duration::from_secs(60),
     );
-    assert_eq!(out.lines().count(), 1, "{out}");
-    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
     assert_eq!(v["termination"], "cancelled", "{v}");
     let walk = v["walk"].as_array().expect("walk");
     assert!(walk.len() > 2 && walk[0] == "f0-c00" && walk[walk.len() - 1] == "f0-c00");
@@ -735,13 +751,11 @@ fn plan_shows_progress_and_ctrl_c_returns_the_best_walk_so_far_saved() {
 /// object), and Ctrl-C stops the team plan with a walk for every surveyor, saved.
 #[test]
 fn team_plan_shows_progress_and_ctrl_c_keeps_the_walks_so_far() {
-    use std::io::{BufRead, Read};
     let (_dir, db, name) = demo_db();
     // Long enough runs (20 s each) that the interrupt comes during the first.
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
-        .arg("--db")
-        .arg(&db)
-        .args([
+    let v = interrupted(
+        &db,
+        &[
             "team-plan",
             "--building",
             &name,
@@ -751,48 +765,13 @@ fn team_plan_shows_progress_and_ctrl_c_keeps_the_walks_so_far() {
             "f0-c15:f0-c15:60",
             "--time-limit",
             "20",
-            "--progress",
-            "--json",
-        ])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let started = std::time::Instant::now();
-    let mut err = std::io::BufReader::new(child.stderr.take().expect("stderr"));
-    let mut first = String::new();
-    err.read_line(&mut first).expect("a progress line");
-    assert!(
-        first.starts_with("planning ") && first.contains("surveyor 1/2, in turn: "),
-        "{first}"
+        ],
+        |line| {
+            assert!(line.contains("surveyor 1/2, in turn: "), "{line}");
+            true
+        },
+        std::time::Duration::from_secs(15),
     );
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill");
-    assert!(killed.success());
-    let mut rest = String::new();
-    err.read_to_string(&mut rest).expect("stderr");
-    let mut out = String::new();
-    child
-        .stdout
-        .take()
-        .expect("stdout")
-        .read_to_string(&mut out)
-        .expect("stdout");
-    let status = child.wait().expect("wait");
-    assert!(status.success(), "{first}{rest}");
-    assert!(
-        started.elapsed() < std::time::Duration::from_secs(15),
-        "took {:?} after the interrupt",
-        started.elapsed()
-    );
-    assert!(
-        rest.contains("interrupted: stopping with the best walk so far"),
-        "{rest}"
-    );
-    assert_eq!(out.lines().count(), 1, "{out}");
-    let v: serde_json::Value = serde_json::from_str(out.trim()).expect("json");
     assert_eq!(v["cancelled"], true, "{v}");
     assert_eq!(
         v["terminations"],
