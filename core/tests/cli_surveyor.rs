@@ -654,14 +654,17 @@ fn team_plan_keeps_its_walks_as_plans() {
     }
 }
 
-/// Runs `trailprint --db db ARGS` (with `--progress --json`), reads its stderr until
+/// Runs `trailprint --db db COMMAND --building BUILDING ARGS` (`args` split at spaces,
+/// with `--progress --json`), reads its stderr until
 /// `until` holds for a progress line, interrupts it (SIGINT, as Ctrl-C) and waits. Checks
 /// what every interrupted planning command does: each stderr line before is a progress
 /// line, the process says it stops with the best so far, exits 0 within `within`, and
 /// prints one JSON line on stdout, which is returned.
 fn interrupted(
     db: &Path,
-    args: &[&str],
+    command: &str,
+    building: &str,
+    args: &str,
     until: impl Fn(&str) -> bool,
     within: std::time::Duration,
 ) -> serde_json::Value {
@@ -669,7 +672,8 @@ fn interrupted(
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_trailprint"))
         .arg("--db")
         .arg(db)
-        .args(args)
+        .args([command, "--building", building])
+        .args(args.split_whitespace())
         .args(["--progress", "--json"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -718,21 +722,9 @@ fn plan_shows_progress_and_ctrl_c_returns_the_best_walk_so_far_saved() {
     // the interrupt. Interrupted once a report carries a best walk.
     let v = interrupted(
         &db,
-        &[
-            "plan",
-            "--building",
-            &name,
-            "--start",
-            "f0-c00",
-            "--end",
-            "f0-c00",
-            "--budget",
-            "120",
-            "--algorithm",
-            "exact",
-            "--time-limit",
-            "600",
-        ],
+        "plan",
+        &name,
+        "--start f0-c00 --end f0-c00 --budget 120 --algorithm exact --time-limit 600",
         |line| line.contains(" nats"),
         std::time::Duration::from_secs(60),
     );
@@ -755,17 +747,9 @@ fn team_plan_shows_progress_and_ctrl_c_keeps_the_walks_so_far() {
     // Long enough runs (20 s each) that the interrupt comes during the first.
     let v = interrupted(
         &db,
-        &[
-            "team-plan",
-            "--building",
-            &name,
-            "--surveyor",
-            "f0-c00:f0-c00:60",
-            "--surveyor",
-            "f0-c15:f0-c15:60",
-            "--time-limit",
-            "20",
-        ],
+        "team-plan",
+        &name,
+        "--surveyor f0-c00:f0-c00:60 --surveyor f0-c15:f0-c15:60 --time-limit 20",
         |line| {
             assert!(line.contains("surveyor 1/2, in turn: "), "{line}");
             true
