@@ -212,10 +212,11 @@ fn a_baseline_stopped_early_returns_at_least_the_systematic_walk() {
             assert_exact_and_at_least(&b, &req, &r, cov.utility_nats, &format!("{alg}"));
         }
     }
-    // Greedy's rounds on 125 vertices take far longer than 150 ms, and so does branch and
-    // bound, so the rule was exercised.
+    // Branch and bound on 125 vertices never ends within 150 ms, and the other baselines
+    // mostly do not either (greedy once finished inside it on an idle machine), so the
+    // rule was exercised on branch and bound and at least two more.
     assert!(
-        stopped.contains(&Algorithm::Greedy) && stopped.contains(&Algorithm::Exact),
+        stopped.contains(&Algorithm::Exact) && stopped.len() >= 3,
         "{stopped:?}"
     );
 
