@@ -31,8 +31,9 @@ pub struct SessionOptions {
     pub calibration_weight_steps: f64,
     /// Seed of the replanner: replan k of the session uses seed + k (default 1).
     pub seed: u64,
-    /// Most memory a replan may use, MiB (null: 512), as `PlanRequest.memoryBudgetMb`: what
-    /// the phone allows.
+    /// Memory budget of the session, MiB (null: 512): what the phone allows. A replan may
+    /// use all of it (as `PlanRequest.memoryBudgetMb`); the running figures half (see
+    /// `SessionProgress.sampleBlock`).
     #[uniffi(default)]
     pub memory_budget_mb: Option<u64>,
 }
@@ -341,6 +342,15 @@ pub struct SessionProgress {
     pub remaining_s: f64,
     /// Scans recorded so far (fingerprints collected).
     pub samples: u64,
+    /// Scans the utility and the coverage map account for: all of them, except, while
+    /// `sampleBlock` is above 1, the last few of a run not yet complete.
+    pub samples_in_figures: u64,
+    /// 1 while the figures condition on every scan (exact). Above 1 once the session's
+    /// memory budget (`SessionOptions.memoryBudgetMb`, half of it for these figures) was
+    /// reached: they then keep one scan of every `sampleBlock` (the one nearest a
+    /// vertex), so `collectedUtilityNats` is a lower bound ("at least") and the coverage
+    /// map's uncertainty an upper bound. Every scan is still stored.
+    pub sample_block: u64,
     /// Utility of the walk the session started with, valued for this session's surveyor
     /// profile, nats.
     pub planned_utility_nats: f64,
@@ -371,6 +381,8 @@ impl From<core::Progress> for SessionProgress {
             elapsed_s: p.elapsed_s,
             remaining_s: p.remaining_s,
             samples: p.samples,
+            samples_in_figures: p.samples_in_figures,
+            sample_block: p.sample_block,
             planned_utility_nats: p.planned_utility_nats,
             collected_utility_nats: p.collected_utility_nats,
             step_length_m: p.step_length_m,
@@ -412,8 +424,11 @@ pub struct SessionSummary {
     pub steps: u64,
     /// As in `SessionProgress.plannedUtilityNats`, nats.
     pub planned_utility_nats: f64,
-    /// As in `SessionProgress.collectedUtilityNats`, nats.
+    /// As in `SessionProgress.collectedUtilityNats`, nats (a lower bound when
+    /// `sampleBlock` is above 1).
     pub collected_utility_nats: f64,
+    /// As in `SessionProgress.sampleBlock`: 1 when the figures count every scan.
+    pub sample_block: u64,
     /// The final step-length estimate, m (0 for a robot).
     pub step_length_m: f64,
     /// Replans applied, automatic or asked for.
@@ -440,6 +455,7 @@ impl From<core::Summary> for SessionSummary {
             steps: s.steps,
             planned_utility_nats: s.planned_utility_nats,
             collected_utility_nats: s.collected_utility_nats,
+            sample_block: s.sample_block,
             step_length_m: s.step_length_m,
             replans: s.replans,
             off_route_events: s.off_route_events,

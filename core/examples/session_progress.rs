@@ -9,6 +9,14 @@
 //! utility engine). It also reports the time to build the posterior up to that size
 //! sample by sample (what resuming such a session costs) and the memory the factors hold.
 //!
+//! A second table runs the same walk to 20,000 samples with the memory budget of a
+//! session (`memory_budget_mb`, half of it for the running posterior): the default
+//! 512 MiB and a phone's 128 MiB. Past the rows a budget allows, the posterior keeps one
+//! sample of every `k` (`session::posterior`); the table shows `k`, the memory held, the
+//! time to take all the samples at once (what resuming the session costs), the time per
+//! scan after that, and the utility against the exact one of all samples (from the
+//! unbounded posterior of the first table, up to 10,000 samples).
+//!
 //! Run: `cargo run --release -p trailprint-core --example session_progress`
 
 use std::sync::Arc;
@@ -66,16 +74,19 @@ fn main() -> trailprint::Result<()> {
         at = next;
     }
     let engine = UtilityEngine::new(b.clone(), kernel, Surveyor::robot())?;
-    let mut post = IncrementalPosterior::new(&b, kernel)?;
+    let mut post = IncrementalPosterior::new(&b, kernel, usize::MAX)?;
     let built = Instant::now();
     println!(
         "\n| samples | per scan: add + utility + coverage map | from scratch (one evaluation) | build to this size | factors held |"
     );
     println!("|---:|---:|---:|---:|---:|");
+    // The unbounded posterior's utilities, for the second table.
+    let mut exact_at: Vec<(usize, f64)> = Vec::new();
     for &n in &[300usize, 3_000, 10_000] {
         while post.samples() < n {
             post.add(points[post.samples()], 0.0)?;
         }
+        exact_at.push((n, post.utility()));
         let build_s = built.elapsed().as_secs_f64();
         let reps = 20;
         let t = Instant::now();
@@ -107,6 +118,59 @@ fn main() -> trailprint::Result<()> {
             post.memory_bytes() as f64 / 1e6
         );
         std::hint::black_box(sink);
+    }
+    drop(post);
+    while points.len() < 20_020 {
+        let nb = b.neighbours(at);
+        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
+        let len = b.edges[e].length;
+        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
+        let mut s = carry;
+        while s < len {
+            let t = s / len;
+            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
+            points.push(Point::new(
+                pa.x + t * (pb.x - pa.x),
+                pa.y + t * (pb.y - pa.y),
+                floor,
+            ));
+            s += 0.5;
+        }
+        carry = s - len;
+        at = next;
+    }
+    println!(
+        "\n| memory_budget_mb | samples | kept: one of | factors held | resume (all samples at once) | per scan | utility | exact (all samples) |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let obs: Vec<(Point, f64)> = points.iter().map(|&p| (p, 0.0)).collect();
+    for mb in [512usize, 128] {
+        for &n in &[3_000usize, 10_000, 20_000] {
+            let mut post = IncrementalPosterior::new(&b, kernel, mb << 20)?;
+            let t = Instant::now();
+            post.add_all(&obs[..n])?;
+            let resume_s = t.elapsed().as_secs_f64();
+            let utility = post.utility();
+            let reps = 20;
+            let t = Instant::now();
+            let mut sink = 0.0;
+            for _ in 0..reps {
+                post.add(points[post.samples()], 0.0)?;
+                sink += post.utility();
+                sink += post.vertex_variance().iter().sum::<f64>();
+            }
+            std::hint::black_box(sink);
+            let per_scan_ms = t.elapsed().as_secs_f64() * 1000.0 / reps as f64;
+            let exact = exact_at
+                .iter()
+                .find(|e| e.0 == n)
+                .map_or("-".to_string(), |e| format!("{:.2} nats", e.1));
+            println!(
+                "| {mb} | {n} | {} | {:.0} MB | {resume_s:.2} s | {per_scan_ms:.3} ms | {utility:.2} nats | {exact} |",
+                post.block(),
+                post.memory_bytes() as f64 / 1e6,
+            );
+        }
     }
     Ok(())
 }

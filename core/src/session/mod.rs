@@ -197,6 +197,20 @@ impl Session {
         for entry in log.events(session_id)?.iter().take_while(|e| e.seq <= seq) {
             s.replay(entry)?;
         }
+        // The samples all at once: one blocked factorisation, not one row per sample.
+        let samples: Vec<(Point, f64)> = s
+            .tracker
+            .samples()
+            .iter()
+            .map(|c| {
+                let p = Point::new(c.position.x, c.position.y, c.position.floor);
+                (p, c.extra_noise)
+            })
+            .collect();
+        if let Err(e) = s.posterior.add_all(&samples) {
+            s.posterior_error = Some(format!("the samples of the log: {e}"));
+        }
+        s.absorb_samples();
         Ok(s)
     }
 
@@ -212,7 +226,10 @@ impl Session {
         let kernel = plan.record.kernel;
         let engine = UtilityEngine::new(building.clone(), kernel, settings.surveyor)?;
         let planned_utility = engine.utility(&walk)?;
-        let posterior = IncrementalPosterior::new(&building, kernel)?;
+        let posterior_bytes = usize::try_from(settings.options.memory_budget_mb)
+            .unwrap_or(usize::MAX)
+            .saturating_mul(1 << 20);
+        let posterior = IncrementalPosterior::new(&building, kernel, posterior_bytes)?;
         let tracker = Tracker::new(
             id,
             &building,
@@ -308,13 +325,15 @@ impl Session {
         };
         self.tracker.check(&b, &ev).map_err(bad)?;
         self.tracker.apply(&b, &ev, entry.seq);
-        self.absorb_samples();
         Ok(())
     }
 
     /// Feeds the samples the tracker collected since the last call to the running
     /// posterior. A numerical failure is kept and reported by the utility and progress.
     fn absorb_samples(&mut self) {
+        if self.posterior_error.is_some() {
+            return;
+        }
         let done = self.posterior.samples();
         for s in &self.tracker.samples()[done.min(self.tracker.samples().len())..] {
             let p = Point::new(s.position.x, s.position.y, s.position.floor);
@@ -322,6 +341,14 @@ impl Session {
                 self.posterior_error = Some(format!("sample of event {}: {e}", s.seq));
                 return;
             }
+        }
+        // At the end, the samples of a row not yet complete go into the figures too.
+        if matches!(
+            self.tracker.status(),
+            SessionStatus::Finished | SessionStatus::Aborted
+        ) && let Err(e) = self.posterior.flush()
+        {
+            self.posterior_error = Some(format!("the last samples: {e}"));
         }
     }
 
@@ -384,7 +411,8 @@ impl Session {
     }
 
     /// Replans from the vertex the surveyor is at or walking to, with the budget left, to
-    /// the same end, conditioning on the pilot data and every sample collected so far. The
+    /// the same end, conditioning on the pilot data and every sample collected so far
+    /// (past the running posterior's memory budget, the samples it keeps). The
     /// walked part stays recorded. When the budget left cannot reach the end, the new walk
     /// is the shortest way there (`over_budget`).
     pub fn replan(&mut self) -> Result<ReplanOutcome> {
@@ -394,7 +422,12 @@ impl Session {
         let budget = left.max(0.0);
         let end = self.tracker.end();
         let model = *self.tracker.surveyor();
-        let prior = self.tracker.observations();
+        // Every sample, or past REPLAN_PRIOR_MAX of them (or the running posterior's
+        // memory budget) one of several: a replan then fits its time and memory.
+        let prior = match self.posterior_ok() {
+            Ok(p) => p.kept_samples(posterior::REPLAN_PRIOR_MAX).1,
+            Err(_) => self.tracker.observations(),
+        };
         let seed = self
             .tracker
             .options()
@@ -705,6 +738,8 @@ impl Session {
             elapsed_s,
             remaining_s: remaining / observed,
             samples: t.samples().len() as u64,
+            samples_in_figures: self.posterior_ok()?.samples_in_figures() as u64,
+            sample_block: self.posterior_ok()?.block() as u64,
             planned_utility_nats: self.planned_utility,
             collected_utility_nats: self.collected_utility()?,
             step_length_m: t.step_length_m(),
@@ -740,6 +775,7 @@ impl Session {
             steps: self.tracker.steps_total(),
             planned_utility_nats: p.planned_utility_nats,
             collected_utility_nats: p.collected_utility_nats,
+            sample_block: p.sample_block,
             step_length_m: p.step_length_m,
             replans: p.replans,
             off_route_events: p.off_route_events,

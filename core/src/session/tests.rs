@@ -293,6 +293,14 @@ fn bad_events_are_rejected_and_write_nothing() {
 }
 
 fn demo_session(surveyor: Surveyor, budget: f64) -> (Arc<MemoryLog>, Session) {
+    demo_session_with(surveyor, budget, SessionOptions::default())
+}
+
+fn demo_session_with(
+    surveyor: Surveyor,
+    budget: f64,
+    options: SessionOptions,
+) -> (Arc<MemoryLog>, Session) {
     let b = Arc::new(Building::from_json(DEMO_BUILDING_JSON, "demo").expect("demo"));
     let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
     let log = Arc::new(MemoryLog::new());
@@ -323,7 +331,7 @@ fn demo_session(surveyor: Surveyor, budget: f64) -> (Arc<MemoryLog>, Session) {
             b.walk_length(&walk),
         ))
         .expect("save");
-    let s = Session::start(log.clone(), plan, surveyor, SessionOptions::default()).expect("start");
+    let s = Session::start(log.clone(), plan, surveyor, options).expect("start");
     (log, s)
 }
 
@@ -741,5 +749,66 @@ fn a_replan_keeps_to_the_sessions_memory_budget() {
             .expect_err("0 MiB")
             .to_string()
             .contains("memory_budget_mb")
+    );
+}
+
+/// A robot session past its memory budget (1 MiB: half of it, 512 KiB, for the running
+/// posterior, about 280 observations on the demo building) keeps one sample of several,
+/// says so in its progress, collects a lower bound of its samples' utility, and resumes
+/// to the same figures.
+#[test]
+fn a_long_robot_session_keeps_to_its_memory_budget_and_says_its_figures_are_a_lower_bound() {
+    let options = SessionOptions {
+        memory_budget_mb: 1,
+        ..SessionOptions::default()
+    };
+    let (log, mut s) = demo_session_with(Surveyor::robot(), 300.0, options);
+    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+    let mut blocks = Vec::new();
+    let (sum, _) = simulate(&mut s, &world, &SimOptions::default(), |sess, _, _| {
+        assert!(sess.posterior.memory_bytes() <= 1 << 19);
+        let p = sess.progress()?;
+        assert!(p.samples_in_figures <= p.samples);
+        assert!(p.samples - p.samples_in_figures < p.sample_block.max(1));
+        if blocks.last() != Some(&p.sample_block) {
+            blocks.push(p.sample_block);
+        }
+        Ok(())
+    })
+    .expect("simulate");
+    assert!(sum.samples > 500, "{} samples", sum.samples);
+    assert_eq!(blocks.first(), Some(&1));
+    assert!(
+        blocks.len() >= 2 && blocks.windows(2).all(|w| w[1] == 2 * w[0]),
+        "{blocks:?}"
+    );
+    let p = s.progress().expect("progress");
+    assert_eq!(
+        p.samples_in_figures, p.samples,
+        "finished: every sample accounted for"
+    );
+    let all = s.collected_utility_from_scratch().expect("from scratch");
+    eprintln!(
+        "{} samples, one kept of {:?}: {:.2} of {all:.2} nats",
+        p.samples, blocks, p.collected_utility_nats
+    );
+    assert!(p.collected_utility_nats < all);
+    assert!(
+        p.collected_utility_nats > 0.85 * all,
+        "{} of {all}",
+        p.collected_utility_nats
+    );
+    // What a replan conditions on: at most the samples the figures keep.
+    let (k, kept) = s.posterior.kept_samples(usize::MAX);
+    assert_eq!(k as u64, p.sample_block);
+    assert_eq!(kept.len() as u64, p.samples.div_ceil(p.sample_block));
+    // Resuming replays to the same figures, bit for bit.
+    let resumed = Session::resume(log.clone(), s.id()).expect("resume");
+    let q = resumed.progress().expect("progress");
+    assert_eq!(q.sample_block, p.sample_block);
+    assert_eq!(q.samples_in_figures, p.samples_in_figures);
+    assert_eq!(
+        q.collected_utility_nats.to_bits(),
+        p.collected_utility_nats.to_bits()
     );
 }

@@ -46,8 +46,10 @@ pub struct SessionOptions {
     /// Replans keep part of the budget left in reserve for wrong turns, following the
     /// rate of wrong turns observed so far (see `Session::replan`).
     pub deviation_reserve: bool,
-    /// Most memory a replan may use, MiB (the plan's own `memory_budget`): on a phone,
-    /// what the app allows. A replan that would need more is refused with the size.
+    /// Memory budget of the session, MiB: on a phone, what the app allows. Half of it is
+    /// the running posterior's (past that, its rows average consecutive samples, see
+    /// `session::posterior`); a replan may use all of it (the plan's own
+    /// `memory_budget`) and one that would need more is refused with the size.
     pub memory_budget_mb: u64,
 }
 
@@ -324,6 +326,14 @@ pub struct Progress {
     /// Estimated time to walk the rest, seconds.
     pub remaining_s: f64,
     pub samples: u64,
+    /// Samples the utility and uncertainty below include: all of them, except, once rows
+    /// average several samples (`sample_block` above 1), those of a row not yet complete.
+    pub samples_in_figures: u64,
+    /// Samples per row of the running posterior: 1 while the figures are exact; above 1
+    /// once the session's memory budget made each row the mean of that many consecutive
+    /// samples, and then the collected utility is a lower bound and the uncertainty an
+    /// upper bound of the samples' own (`session::posterior`).
+    pub sample_block: u64,
     /// Utility of the plan as first planned (SPEC section 3), nats.
     pub planned_utility_nats: f64,
     /// Utility of the samples actually recorded, with their real label noise, nats.
@@ -351,6 +361,8 @@ pub struct Summary {
     pub steps: u64,
     pub planned_utility_nats: f64,
     pub collected_utility_nats: f64,
+    /// As in [`Progress::sample_block`]: 1 when the figures count every sample.
+    pub sample_block: u64,
     pub step_length_m: f64,
     pub replans: u32,
     pub off_route_events: u32,
@@ -378,6 +390,9 @@ pub struct ReplanOutcome {
     /// Metres of the budget left that the new walk keeps back for wrong turns still to
     /// come (it was planned with `budget_left_m - reserve_m`).
     pub reserve_m: f64,
-    /// Utility of the new walk given pilot data and everything collected, nats.
+    /// Utility of the pilot data, the samples collected and the new walk, nats: of every
+    /// sample up to [`crate::session::posterior::REPLAN_PRIOR_MAX`] of them, beyond of
+    /// those the replan conditioned on (one in `k`, the nearest to a vertex), and then a
+    /// lower bound.
     pub utility_nats: f64,
 }

@@ -383,10 +383,18 @@ pub fn run(a: Args, db: Option<&Path>) -> Result<()> {
         } else {
             println!("samples {}; check-ins {}", s.samples, s.check_ins);
         }
-        println!(
-            "utility: planned {:.2} nats, collected {:.2} nats",
-            s.planned_utility_nats, s.collected_utility_nats
-        );
+        if s.sample_block > 1 {
+            println!(
+                "utility: planned {:.2} nats, collected at least {:.2} nats (past half the \
+                 memory budget, one sample of every {} counted)",
+                s.planned_utility_nats, s.collected_utility_nats, s.sample_block
+            );
+        } else {
+            println!(
+                "utility: planned {:.2} nats, collected {:.2} nats",
+                s.planned_utility_nats, s.collected_utility_nats
+            );
+        }
         println!(
             "wrong turns {}; off-route events {}; replans {}",
             report.wrong_turns, s.off_route_events, s.replans

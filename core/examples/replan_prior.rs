@@ -1,0 +1,101 @@
+//! What a session's replan costs as the samples it conditions on grow (development aid):
+//! on a building file, a robot's samples every 0.5 m along a seeded random walk from
+//! vertex 0 are the prior; for each prior size it times one exact evaluation of a fixed
+//! 500 m walk given that prior (`UtilityEngine::with_prior`, then `utility`), and one
+//! replan by `auto` with the session's limit (`session::default_replanner`) from the
+//! prior's last vertex back to vertex 0 with 500 m.
+//!
+//! `cargo run --release -p trailprint-core --example replan_prior -- FILE [SIZES...]`
+//! (sizes default to 250 1000 2000 4000).
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use trailprint::gp::Point;
+use trailprint::session::{ReplanRequest, default_replanner};
+use trailprint::surveyor::Surveyor;
+use trailprint::utility::{Observation, UtilityEngine};
+
+#[path = "common/cases.rs"]
+mod cases;
+
+fn main() -> trailprint::Result<()> {
+    let a = cases::args_or_usage(2, "replan_prior FILE [SIZES...]")?;
+    let (b, kernel) = cases::load_with_kernel(&a[1])?;
+    let mut sizes: Vec<usize> = a[2..].iter().filter_map(|s| s.parse().ok()).collect();
+    if sizes.is_empty() {
+        sizes = vec![250, 1000, 2000, 4000];
+    }
+    let max = sizes.iter().copied().max().unwrap_or(0);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let (mut pts, mut ends): (Vec<Point>, Vec<usize>) = (Vec::new(), Vec::new());
+    let (mut at, mut carry) = (0usize, 0.0f64);
+    while pts.len() < max {
+        let nb = b.neighbours(at);
+        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
+        let len = b.edges[e].length;
+        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
+        let mut s = carry;
+        while s < len {
+            let t = s / len;
+            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
+            pts.push(Point::new(
+                pa.x + t * (pb.x - pa.x),
+                pa.y + t * (pb.y - pa.y),
+                floor,
+            ));
+            ends.push(next);
+            s += 0.5;
+        }
+        carry = s - len;
+        at = next;
+    }
+    // A fixed walk of about 500 m: the random walk's own first 1,000 samples' vertices.
+    let model = Surveyor::robot();
+    let replanner = default_replanner(&b);
+    println!(
+        "{} ({} vertices), robot, replanner {:?}",
+        b.name,
+        b.len(),
+        replanner.origin()
+    );
+    println!("| prior samples | exact evaluation of a 500 m walk | replan, 500 m | its utility |");
+    println!("|---:|---:|---:|---:|");
+    let mut walk = vec![0usize];
+    for &v in &ends {
+        if walk.last() != Some(&v) && b.walk_length(&walk) < 500.0 {
+            walk.push(v);
+        }
+    }
+    for &n in &sizes {
+        let prior: Vec<Observation> = pts[..n]
+            .iter()
+            .map(|&pos| Observation {
+                pos,
+                extra_noise: 0.0,
+            })
+            .collect();
+        let t = Instant::now();
+        let engine = UtilityEngine::with_prior(b.clone(), kernel, model, &prior)?;
+        let u = engine.utility(&walk)?;
+        let eval_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let start = ends[n - 1];
+        let w = replanner.replan(&ReplanRequest {
+            building: &b,
+            kernel,
+            model,
+            prior: &prior,
+            start,
+            end: 0,
+            budget_m: 500.0,
+            seed: 1,
+            memory_budget: 512 << 20,
+        })?;
+        let replan_s = t.elapsed().as_secs_f64();
+        let ru = engine.utility(&w)?;
+        std::hint::black_box(u);
+        println!("| {n} | {eval_s:.2} s | {replan_s:.2} s | {ru:.2} nats |");
+    }
+    Ok(())
+}
