@@ -2,18 +2,31 @@ package dev.trailprint
 
 import dev.trailprint.demo.DemoScenarios
 import dev.trailprint.demo.SimulatedWifi
+import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.PlanAlgorithm
+import dev.trailprint.ffi.SessionOptions
+import dev.trailprint.ffi.SessionProgress
 import dev.trailprint.ffi.SessionStatus
+import dev.trailprint.ffi.SessionSummary
 import dev.trailprint.ffi.SurveySession
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
+import dev.trailprint.ffi.defaultSessionOptions
+import dev.trailprint.robot.SimulatedRobot
+import dev.trailprint.robot.SimulatedRobotConfig
+import dev.trailprint.robot.Waypoint
+import dev.trailprint.survey.LifecycleState
 import dev.trailprint.survey.SurveyController
+import dev.trailprint.survey.SurveyLive
+import dev.trailprint.survey.SurveyNotificationPolicy
+import dev.trailprint.survey.SurveyPhase
 import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
 import dev.trailprint.testing.greedyPlan
+import dev.trailprint.ui.FinishState
 import dev.trailprint.ui.SurveyUiState
 import java.io.File
 import java.util.concurrent.ConcurrentLinkedQueue
@@ -210,6 +223,105 @@ class SessionTest : ScratchDir("trailprint-session-test") {
             val sessions = api.sessions(bid)
             assertEquals(2, sessions.size)
             assertTrue(sessions.all { it.status == SessionStatus.FINISHED })
+        }
+    }
+
+    /**
+     * A new robot session of [planId] with [options], driven along the plan by the
+     * simulated robot (seeded) slowly enough to take [scans] scans, one a second with
+     * each pose; [check] sees the progress every 20 scans. Returns the summary and the
+     * fingerprints the session stored.
+     */
+    private fun driveRobot(
+        store: TrailprintStore,
+        map: BuildingMap,
+        planId: Long,
+        options: SessionOptions?,
+        scans: Int,
+        check: (SessionProgress) -> Unit = {},
+    ): Pair<SessionSummary, Int> = store.startSession(planId, defaultRobotProfile(), options).use { s ->
+        val byId = map.vertices.associateBy { it.id }
+        val plan = store.getPlan(planId)
+        val waypoints = plan.walk.map { id -> byId.getValue(id).let { Waypoint(id, it.x, it.y, it.floor) } }
+        val wifi = SimulatedWifi(map, seed = 2)
+        val speed = plan.lengthM / scans
+        val robot = SimulatedRobot(SimulatedRobotConfig(speed = speed, poseIntervalMs = 1000, seed = 2, timeScale = 0.0, startTimeMs = t0))
+        var lastScan: Long? = null
+        var scanned = 0
+        var t = t0
+        for (p in robot.trajectory(waypoints)) {
+            t = p.timestampMs
+            s.robotPose(t, p.x, p.y, p.floor)
+            if (lastScan == null || t - lastScan >= 1000) {
+                lastScan = t
+                val scan = wifi.scanAt(t, p.x, p.y, p.floor)
+                s.scan(t, scan.readings.map { WifiReading(it.bssid, it.rssDbm.toDouble()) })
+                if (++scanned % 20 == 0) check(s.progress())
+            }
+        }
+        s.finish(t + 1000) to s.samples().size
+    }
+
+    @Test
+    fun aLongRobotSessionPastItsMemoryBudgetSaysItsInformationIsALowerBound() {
+        // A robot walk to the far end of the building (greedy: some 80 m of a 300 m budget),
+        // 640 scans along it (8 a metre): more than half of 1 MiB holds exactly (~280).
+        val (store, bid, planId) = setUp(File(dir, "budget.db").path, budget = 300.0, end = "r34", robot = true)
+        store.use {
+            val map = store.buildingMap(bid)
+            val blocks = mutableListOf<ULong>()
+            var lowerBound: SessionProgress? = null
+            val (bounded, boundedStored) = driveRobot(store, map, planId, defaultSessionOptions().copy(memoryBudgetMb = 1uL), scans = 640) { p ->
+                assertTrue(p.samplesInFigures <= p.samples, "${p.samplesInFigures} of ${p.samples} in the figures")
+                if (blocks.lastOrNull() != p.sampleBlock) blocks += p.sampleBlock
+                if (p.sampleBlock > 1uL && lowerBound == null) lowerBound = p
+            }
+            assertEquals(1uL, blocks.firstOrNull(), "exact until the budget is reached: $blocks")
+            assertTrue(blocks.zipWithNext().all { (a, b) -> b > a }, "$blocks")
+            val p = assertNotNull(lowerBound, "the budget was never reached: $blocks")
+            // What the surveyor sees while the survey runs: "≥" before the nats collected.
+            val ui = SurveyUiState.of(map, null, bounded.sessionId, SurveyLive(progress = p), emptyList())
+            assertTrue(ui.collectedIsLowerBound)
+            assertEquals(p.collectedUtilityNats, ui.collectedNats)
+            val running = SurveyNotificationPolicy.of(LifecycleState(phase = SurveyPhase.RUNNING, live = SurveyLive(progress = p)))
+            assertTrue("≥ %.1f of".format(p.collectedUtilityNats) in running.text, running.text)
+            val exactP = p.copy(sampleBlock = 1uL)
+            assertTrue(!SurveyUiState.of(map, null, 1, SurveyLive(progress = exactP), emptyList()).collectedIsLowerBound)
+            val exactText = SurveyNotificationPolicy.of(LifecycleState(phase = SurveyPhase.RUNNING, live = SurveyLive(progress = exactP))).text
+            assertTrue("≥" !in exactText && "%.1f of".format(p.collectedUtilityNats) in exactText, exactText)
+
+            assertEquals(SessionStatus.FINISHED, bounded.status)
+            assertTrue(bounded.samples > 500uL, "${bounded.samples} samples")
+            assertTrue(bounded.sampleBlock > 1uL, "${bounded.sampleBlock}")
+            assertEquals(blocks.last(), bounded.sampleBlock)
+            assertEquals(bounded.samples.toInt(), boundedStored, "every scan is still stored")
+            val info = FinishState(bounded).lines().single { it.startsWith("Information:") }
+            assertEquals(
+                "Information: at least %.1f nats collected (one fingerprint in %d counted, memory budget), %.1f planned"
+                    .format(bounded.collectedUtilityNats, bounded.sampleBlock.toLong(), bounded.plannedUtilityNats),
+                info,
+            )
+            val done = SurveyNotificationPolicy.of(LifecycleState(phase = SurveyPhase.FINISHED, summary = bounded)).text
+            assertTrue("≥ %.1f nats".format(bounded.collectedUtilityNats) in done, done)
+
+            // The same walk within the default budget: exact, and at least as much information.
+            val (exact, exactStored) = driveRobot(store, map, planId, null, scans = 640) { q ->
+                assertEquals(1uL, q.sampleBlock)
+                assertEquals(q.samples, q.samplesInFigures)
+            }
+            assertEquals(1uL, exact.sampleBlock)
+            assertEquals(bounded.samples, exact.samples)
+            assertEquals(boundedStored, exactStored)
+            assertTrue(exact.collectedUtilityNats >= bounded.collectedUtilityNats, "${exact.collectedUtilityNats} < ${bounded.collectedUtilityNats}")
+            assertTrue(bounded.collectedUtilityNats > 0.8 * exact.collectedUtilityNats, "${bounded.collectedUtilityNats} of ${exact.collectedUtilityNats}")
+            // Fewer scans conditioned on: the radio map's uncertainty is an upper bound.
+            assertTrue(bounded.meanStdDb >= exact.meanStdDb && bounded.maxStdDb >= exact.maxStdDb, "$bounded\n$exact")
+            assertEquals(
+                "Information: %.1f nats collected, %.1f planned".format(exact.collectedUtilityNats, exact.plannedUtilityNats),
+                FinishState(exact).lines().single { it.startsWith("Information:") },
+            )
+            val exactDone = SurveyNotificationPolicy.of(LifecycleState(phase = SurveyPhase.FINISHED, summary = exact)).text
+            assertTrue("≥" !in exactDone, exactDone)
         }
     }
 

@@ -51,11 +51,13 @@ object SurveyNotificationPolicy {
             SurveyPhase.IDLE -> "No survey"
         }
         val text = when {
-            p != null -> "%.0f%% of the walk · %d fingerprints · %.1f of %.1f nats".format(
-                100 * p.fractionDone.coerceIn(0.0, 1.0), p.samples.toLong(), p.collectedUtilityNats, p.plannedUtilityNats,
+            // "≥": past its memory budget the session counts one fingerprint of every
+            // sampleBlock, so the nats collected are a lower bound.
+            p != null -> "%.0f%% of the walk · %d fingerprints · %s%.1f of %.1f nats".format(
+                100 * p.fractionDone.coerceIn(0.0, 1.0), p.samples.toLong(), atLeast(p.sampleBlock), p.collectedUtilityNats, p.plannedUtilityNats,
             ) + if (paused) " · tap Resume to walk on" else ""
             state.summary != null -> state.summary.let { s ->
-                "%d fingerprints · %.1f nats · %.0f m walked".format(s.samples.toLong(), s.collectedUtilityNats, s.walkedM)
+                "%d fingerprints · %s%.1f nats · %.0f m walked".format(s.samples.toLong(), atLeast(s.sampleBlock), s.collectedUtilityNats, s.walkedM)
             }
             state.active != null -> "Session ${state.active.sessionId}: starting…"
             else -> ""
@@ -81,6 +83,8 @@ object SurveyNotificationPolicy {
             actions = actions,
         )
     }
+
+    private fun atLeast(sampleBlock: ULong) = if (sampleBlock > 1uL) "≥ " else ""
 
     /**
      * How long to wait before posting [next], given the notification [posted] last (null:

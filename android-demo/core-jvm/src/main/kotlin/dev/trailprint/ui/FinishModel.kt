@@ -31,7 +31,13 @@ data class FinishState(
         listOf(
             "Walked %.0f m of %.0f m in %.0f min".format(s.walkedM, s.budgetM, s.elapsedS / 60),
             "%d fingerprints, %d check-ins, %d replans".format(s.samples.toLong(), s.checkIns.toInt(), s.replans.toInt()),
-            "Information: %.1f nats collected, %.1f planned".format(s.collectedUtilityNats, s.plannedUtilityNats),
+            if (s.sampleBlock > 1uL) {
+                // Past the memory budget the figures keep one scan of every sampleBlock.
+                "Information: at least %.1f nats collected (one fingerprint in %d counted, memory budget), %.1f planned"
+                    .format(s.collectedUtilityNats, s.sampleBlock.toLong(), s.plannedUtilityNats)
+            } else {
+                "Information: %.1f nats collected, %.1f planned".format(s.collectedUtilityNats, s.plannedUtilityNats)
+            },
             "Radio map uncertainty: mean %.1f dB, worst %.1f dB".format(s.meanStdDb, s.maxStdDb),
             "Step length learnt: %.2f m".format(s.stepLengthM),
         )

@@ -40,6 +40,11 @@ data class SurveyUiState(
     val fraction: Double = 0.0,
     val samples: Long = 0,
     val collectedNats: Double = 0.0,
+    /**
+     * [collectedNats] is a lower bound: the session reached its memory budget and its
+     * figures count one fingerprint of every `SessionProgress.sampleBlock` (show "≥").
+     */
+    val collectedIsLowerBound: Boolean = false,
     val plannedNats: Double = 0.0,
     val scanMessage: String? = null,
     /** What the survey costs in CPU time so far (see `AwakeMeter`). */
@@ -79,6 +84,7 @@ data class SurveyUiState(
                 fraction = p?.fractionDone ?: 0.0,
                 samples = p?.samples?.toLong() ?: 0,
                 collectedNats = p?.collectedUtilityNats ?: 0.0,
+                collectedIsLowerBound = p != null && p.sampleBlock > 1uL,
                 plannedNats = p?.plannedUtilityNats ?: 0.0,
                 scanMessage = live.scans?.message(),
                 awakeMessage = live.awake?.message(),

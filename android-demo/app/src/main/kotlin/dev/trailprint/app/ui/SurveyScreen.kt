@@ -174,7 +174,7 @@ fun SurveyScreen(
             )
         }
         LinearProgressIndicator(progress = { s.fraction.toFloat() }, modifier = Modifier.fillMaxWidth())
-        Text("%d fingerprints · %.1f of %.1f nats".format(s.samples, s.collectedNats, s.plannedNats))
+        Text("%d fingerprints · %s%.1f of %.1f nats".format(s.samples, if (s.collectedIsLowerBound) "≥ " else "", s.collectedNats, s.plannedNats))
         s.scanMessage?.let { Text(it, style = MaterialTheme.typography.bodySmall) }
         s.awakeMessage?.let { Text(it, style = MaterialTheme.typography.bodySmall) }
         (listOfNotNull(s.notice) + outcome?.notes.orEmpty()).forEach { Text(it, style = MaterialTheme.typography.bodySmall) }
