@@ -9,12 +9,9 @@
 //! (sizes default to 250 1000 2000 4000).
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use trailprint::gp::Point;
 use trailprint::session::{ReplanRequest, default_replanner};
 use trailprint::surveyor::Surveyor;
-use trailprint::utility::{Observation, UtilityEngine};
+use trailprint::utility::UtilityEngine;
 
 #[path = "common/cases.rs"]
 mod cases;
@@ -27,29 +24,7 @@ fn main() -> trailprint::Result<()> {
         sizes = vec![250, 1000, 2000, 4000];
     }
     let max = sizes.iter().copied().max().unwrap_or(0);
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let (mut pts, mut ends): (Vec<Point>, Vec<usize>) = (Vec::new(), Vec::new());
-    let (mut at, mut carry) = (0usize, 0.0f64);
-    while pts.len() < max {
-        let nb = b.neighbours(at);
-        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
-        let len = b.edges[e].length;
-        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
-        let mut s = carry;
-        while s < len {
-            let t = s / len;
-            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
-            pts.push(Point::new(
-                pa.x + t * (pb.x - pa.x),
-                pa.y + t * (pb.y - pa.y),
-                floor,
-            ));
-            ends.push(next);
-            s += 0.5;
-        }
-        carry = s - len;
-        at = next;
-    }
+    let (pts, ends) = cases::random_walk_samples(&b, 7, max);
     // A fixed walk of about 500 m: the random walk's own first 1,000 samples' vertices.
     let model = Surveyor::robot();
     let replanner = default_replanner(&b);
@@ -68,13 +43,7 @@ fn main() -> trailprint::Result<()> {
         }
     }
     for &n in &sizes {
-        let prior: Vec<Observation> = pts[..n]
-            .iter()
-            .map(|&pos| Observation {
-                pos,
-                extra_noise: 0.0,
-            })
-            .collect();
+        let prior = cases::observations(&pts[..n]);
         let t = Instant::now();
         let engine = UtilityEngine::with_prior(b.clone(), kernel, model, &prior)?;
         let u = engine.utility(&walk)?;

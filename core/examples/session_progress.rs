@@ -22,14 +22,15 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use trailprint::Building;
 use trailprint::gp::{Kernel, Point};
 use trailprint::session::IncrementalPosterior;
 use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
-use trailprint::utility::{Observation, UtilityEngine};
+use trailprint::utility::UtilityEngine;
+
+#[path = "common/cases.rs"]
+mod cases;
 
 fn main() -> trailprint::Result<()> {
     let params = SynthParams {
@@ -51,28 +52,7 @@ fn main() -> trailprint::Result<()> {
         kernel.sn2
     );
     // A seeded random walk on the graph, sampled every 0.5 m.
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let mut points: Vec<Point> = Vec::new();
-    let (mut at, mut carry) = (0usize, 0.0f64);
-    while points.len() < 10_020 {
-        let nb = b.neighbours(at);
-        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
-        let len = b.edges[e].length;
-        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
-        let mut s = carry;
-        while s < len {
-            let t = s / len;
-            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
-            points.push(Point::new(
-                pa.x + t * (pb.x - pa.x),
-                pa.y + t * (pb.y - pa.y),
-                floor,
-            ));
-            s += 0.5;
-        }
-        carry = s - len;
-        at = next;
-    }
+    let (points, _) = cases::random_walk_samples(&b, 7, 20_020);
     let engine = UtilityEngine::new(b.clone(), kernel, Surveyor::robot())?;
     let mut post = IncrementalPosterior::new(&b, kernel, usize::MAX)?;
     let built = Instant::now();
@@ -88,22 +68,8 @@ fn main() -> trailprint::Result<()> {
         }
         exact_at.push((n, post.utility()));
         let build_s = built.elapsed().as_secs_f64();
-        let reps = 20;
-        let t = Instant::now();
-        let mut sink = 0.0;
-        for _ in 0..reps {
-            post.add(points[post.samples()], 0.0)?;
-            sink += post.utility();
-            sink += post.vertex_variance().iter().sum::<f64>();
-        }
-        let per_scan_ms = t.elapsed().as_secs_f64() * 1000.0 / reps as f64;
-        let obs: Vec<Observation> = points[..post.samples()]
-            .iter()
-            .map(|&pos| Observation {
-                pos,
-                extra_noise: 0.0,
-            })
-            .collect();
+        let per_scan_ms = time_scans(&mut post, &points)?;
+        let obs = cases::observations(&points[..post.samples()]);
         let t = Instant::now();
         let scratch = engine.utility_of_observations(&obs)?;
         let scratch_ms = t.elapsed().as_secs_f64() * 1000.0;
@@ -117,28 +83,8 @@ fn main() -> trailprint::Result<()> {
             "| {n} | {per_scan_ms:.3} ms | {scratch_ms:.1} ms | {build_s:.1} s | {:.0} MB |",
             post.memory_bytes() as f64 / 1e6
         );
-        std::hint::black_box(sink);
     }
     drop(post);
-    while points.len() < 20_020 {
-        let nb = b.neighbours(at);
-        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
-        let len = b.edges[e].length;
-        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
-        let mut s = carry;
-        while s < len {
-            let t = s / len;
-            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
-            points.push(Point::new(
-                pa.x + t * (pb.x - pa.x),
-                pa.y + t * (pb.y - pa.y),
-                floor,
-            ));
-            s += 0.5;
-        }
-        carry = s - len;
-        at = next;
-    }
     println!(
         "\n| memory_budget_mb | samples | kept: one of | factors held | resume (all samples at once) | per scan | utility | exact (all samples) |"
     );
@@ -151,16 +97,7 @@ fn main() -> trailprint::Result<()> {
             post.add_all(&obs[..n])?;
             let resume_s = t.elapsed().as_secs_f64();
             let utility = post.utility();
-            let reps = 20;
-            let t = Instant::now();
-            let mut sink = 0.0;
-            for _ in 0..reps {
-                post.add(points[post.samples()], 0.0)?;
-                sink += post.utility();
-                sink += post.vertex_variance().iter().sum::<f64>();
-            }
-            std::hint::black_box(sink);
-            let per_scan_ms = t.elapsed().as_secs_f64() * 1000.0 / reps as f64;
+            let per_scan_ms = time_scans(&mut post, &points)?;
             let exact = exact_at
                 .iter()
                 .find(|e| e.0 == n)
@@ -173,4 +110,19 @@ fn main() -> trailprint::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Milliseconds per scan over 20 scans: add the next sample, then read the utility and
+/// the coverage map, as the progress screen does.
+fn time_scans(post: &mut IncrementalPosterior, points: &[Point]) -> trailprint::Result<f64> {
+    let reps = 20;
+    let t = Instant::now();
+    let mut sink = 0.0;
+    for _ in 0..reps {
+        post.add(points[post.samples()], 0.0)?;
+        sink += post.utility();
+        sink += post.vertex_variance().iter().sum::<f64>();
+    }
+    std::hint::black_box(sink);
+    Ok(t.elapsed().as_secs_f64() * 1000.0 / reps as f64)
 }

@@ -7,8 +7,10 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use trailprint::building::Building;
-use trailprint::gp::{Kernel, fit_kernel};
+use trailprint::gp::{Kernel, Point, fit_kernel};
 use trailprint::surveyor::Surveyor;
 use trailprint::synth::{SynthParams, generate};
 
@@ -125,5 +127,45 @@ pub fn plan_walk(b: &Building, path: &str) -> trailprint::Result<Vec<usize>> {
         .ok_or_else(|| trailprint::Error::InvalidRequest(format!("{path}: no walk")))?
         .iter()
         .map(|v| b.require_vertex(v.as_str().unwrap_or("")))
+        .collect()
+}
+
+/// A robot's samples every 0.5 m along a random walk on `b` from vertex 0 (seeded): at
+/// least `n` of them, each with the vertex its edge leads to.
+pub fn random_walk_samples(b: &Building, seed: u64, n: usize) -> (Vec<Point>, Vec<usize>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut points, mut towards) = (Vec::new(), Vec::new());
+    let (mut at, mut carry) = (0usize, 0.0f64);
+    while points.len() < n {
+        let nb = b.neighbours(at);
+        let (next, e) = nb[(rng.next_u64() % nb.len() as u64) as usize];
+        let len = b.edges[e].length;
+        let (pa, pb) = (b.vertices[at].pos, b.vertices[next].pos);
+        let mut s = carry;
+        while s < len {
+            let t = s / len;
+            let floor = if t <= 0.5 { pa.floor } else { pb.floor };
+            points.push(Point::new(
+                pa.x + t * (pb.x - pa.x),
+                pa.y + t * (pb.y - pa.y),
+                floor,
+            ));
+            towards.push(next);
+            s += 0.5;
+        }
+        carry = s - len;
+        at = next;
+    }
+    (points, towards)
+}
+
+/// `points` as observations with no extra noise (a robot's samples).
+pub fn observations(points: &[Point]) -> Vec<trailprint::utility::Observation> {
+    points
+        .iter()
+        .map(|&pos| trailprint::utility::Observation {
+            pos,
+            extra_noise: 0.0,
+        })
         .collect()
 }
