@@ -438,11 +438,11 @@ impl Session {
         let over_budget = home > budget + replan::BUDGET_EPS;
         let keep = !over_budget && self.tracker.options().deviation_reserve;
         let left_for_plan = budget;
-        let plan_within = |this: &Self, budget: f64| -> Result<Vec<usize>> {
+        let plan_within = |this: &Self, budget: f64| -> Result<(Vec<usize>, Option<f64>)> {
             if over_budget || budget <= home + 1e-6 {
-                replan::shortest_path(&b, origin, end)
+                Ok((replan::shortest_path(&b, origin, end)?, None))
             } else {
-                this.replanner.replan(&ReplanRequest {
+                this.replanner.replan_scored(&ReplanRequest {
                     building: &b,
                     kernel: this.kernel,
                     model,
@@ -471,12 +471,12 @@ impl Session {
             }
         };
         let mut reserve = reserve_for(self, home);
-        let mut walk = plan_within(self, budget - reserve)?;
+        let (mut walk, mut scored) = plan_within(self, budget - reserve)?;
         let farthest = walk.iter().map(|&v| to_end[v]).fold(home, f64::max);
         let wider = reserve_for(self, farthest);
         if wider > reserve + 1e-6 {
             reserve = wider;
-            walk = plan_within(self, budget - reserve)?;
+            (walk, scored) = plan_within(self, budget - reserve)?;
         }
         let budget = budget - reserve;
         b.check_walk(&walk)?;
@@ -501,8 +501,12 @@ impl Session {
                 ),
             });
         }
-        let engine = UtilityEngine::with_prior(b.clone(), self.kernel, model, &prior)?;
-        let utility = engine.utility(&walk)?;
+        let utility = match scored {
+            Some(u) => u,
+            None => {
+                UtilityEngine::with_prior(b.clone(), self.kernel, model, &prior)?.utility(&walk)?
+            }
+        };
         let samples = sample_walk(&b, &walk, &model, &self.kernel)?.len() as u64;
         let ids = b.walk_ids(&walk);
         let plan = PlanData {

@@ -678,7 +678,10 @@ mod tests {
     use nalgebra::DMatrix;
 
     fn demo() -> (Building, Kernel) {
-        let b = Building::from_json(crate::synth::DEMO_BUILDING_JSON, "demo").expect("demo");
+        // The shipped demo building (`synth::DEMO_BUILDING_JSON`, a `research` module:
+        // these tests run in the phone's configuration too).
+        let json = include_str!("../../data/demo-building.json");
+        let b = Building::from_json(json, "demo").expect("demo");
         let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
         (b, k)
     }

@@ -38,6 +38,13 @@ pub trait Replanner: Send + Sync {
     /// A walk (vertex indices) from `start` to `end` of length at most `budget_m`, or
     /// [`Error::Unreachable`] when none exists.
     fn replan(&self, request: &ReplanRequest<'_>) -> Result<Vec<usize>>;
+    /// [`Replanner::replan`], and the walk's exact utility given the request's prior
+    /// (SPEC section 3) when the replanner computed it, so that the session does not
+    /// evaluate it again (on the generated mall, a robot's 1,800 m walk is most of a
+    /// second per evaluation).
+    fn replan_scored(&self, request: &ReplanRequest<'_>) -> Result<(Vec<usize>, Option<f64>)> {
+        Ok((self.replan(request)?, None))
+    }
     /// Where its walks come from, stored with the plan (`algorithm`).
     fn origin(&self) -> PlanOrigin;
 }
@@ -259,6 +266,11 @@ impl PlannerReplanner {
 
 impl Replanner for PlannerReplanner {
     fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
+        Ok(self.replan_scored(r)?.0)
+    }
+
+    /// The planner's own exact utility of its walk comes along.
+    fn replan_scored(&self, r: &ReplanRequest<'_>) -> Result<(Vec<usize>, Option<f64>)> {
         let b = r.building;
         let settings = crate::plan::PlanSettings {
             model: r.model,
@@ -292,7 +304,7 @@ impl Replanner for PlannerReplanner {
             }
             other => other?,
         };
-        Ok(res.walk_indices)
+        Ok((res.walk_indices, Some(res.utility_nats)))
     }
 
     fn origin(&self) -> PlanOrigin {

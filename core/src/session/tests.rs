@@ -812,3 +812,41 @@ fn a_long_robot_session_keeps_to_its_memory_budget_and_says_its_figures_are_a_lo
         p.collected_utility_nats.to_bits()
     );
 }
+
+/// A planner's replan brings its own exact utility given the samples (the session does
+/// not evaluate the walk again), and it is the utility of SPEC 3 given pilot data, the
+/// samples and the new walk.
+#[test]
+fn a_planner_replan_reports_the_exact_utility_given_the_samples() {
+    use crate::plan::Algorithm;
+    let (log, mut s) = setup(40.0, human_exact_step(1.0));
+    s.set_replanner(Arc::new(PlannerReplanner::new(Algorithm::Greedy)));
+    let mut t = 0;
+    for _ in 0..3 {
+        t = steps(&mut s, t, 2);
+        s.record(scan(t, &[])).expect("scan");
+    }
+    let out = s.replan().expect("replan");
+    let walk = s.building().resolve_walk(&out.walk).expect("walk");
+    let exact = UtilityEngine::with_prior(
+        s.building().clone(),
+        s.kernel,
+        human_exact_step(1.0),
+        &s.tracker().observations(),
+    )
+    .expect("engine")
+    .utility(&walk)
+    .expect("utility");
+    assert_eq!(s.samples().len(), 3);
+    assert!(
+        (out.utility_nats - exact).abs() < 1e-9 * exact,
+        "{} vs {exact}",
+        out.utility_nats
+    );
+    let saved = log
+        .load_plan(out.plan_id)
+        .expect("plan")
+        .record
+        .utility_nats;
+    assert_eq!(saved.to_bits(), out.utility_nats.to_bits());
+}

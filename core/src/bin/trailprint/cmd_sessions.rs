@@ -36,6 +36,9 @@ struct Row {
     replans: Option<u32>,
     planned_utility_nats: Option<f64>,
     collected_utility_nats: Option<f64>,
+    /// 1 when the collected utility counts every sample; `k > 1` when the session's
+    /// memory budget made it count one of every `k` (then a lower bound).
+    sample_block: Option<u64>,
     /// Why the figures that need a replay are missing.
     note: Option<String>,
 }
@@ -71,6 +74,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
                 replans: None,
                 planned_utility_nats: None,
                 collected_utility_nats: None,
+                sample_block: None,
                 note: None,
             };
             match Session::replay_to(log.clone(), s.id, i64::MAX).and_then(|x| x.summary()) {
@@ -80,6 +84,7 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
                     row.replans = Some(sum.replans);
                     row.planned_utility_nats = Some(sum.planned_utility_nats);
                     row.collected_utility_nats = Some(sum.collected_utility_nats);
+                    row.sample_block = Some(sum.sample_block);
                 }
                 Err(e) => row.note = Some(format!("cannot be replayed: {e}")),
             }
@@ -119,7 +124,11 @@ pub fn run(args: &Args, db: Option<&Path>) -> Result<()> {
             num(r.budget_m, 1),
             r.samples,
             r.replans.map_or("-".to_string(), |x| x.to_string()),
-            num(r.collected_utility_nats, 2),
+            match r.sample_block {
+                // A lower bound: one sample of several counted (memory budget).
+                Some(k) if k > 1 => format!(">={}", num(r.collected_utility_nats, 2)),
+                _ => num(r.collected_utility_nats, 2),
+            },
             r.note
                 .as_ref()
                 .map(|n| format!("  ({n})"))
