@@ -850,3 +850,39 @@ fn a_planner_replan_reports_the_exact_utility_given_the_samples() {
         .utility_nats;
     assert_eq!(saved.to_bits(), out.utility_nats.to_bits());
 }
+
+/// Resuming a session of more than [`posterior::DENSE_FROM`] samples takes them in one
+/// blocked factorisation: the figures agree with the live session's to rounding, and the
+/// session goes on from there the same way.
+#[test]
+fn resuming_a_long_session_factors_its_samples_at_once_and_agrees_with_the_live_one() {
+    let (log, s, sum, _) = simulate_demo(
+        Surveyor::robot(),
+        300.0,
+        &SimOptions::default(),
+        |_, _, _| Ok(()),
+    );
+    assert!(
+        sum.samples as usize >= posterior::DENSE_FROM,
+        "{} samples",
+        sum.samples
+    );
+    let live = s.progress().expect("progress");
+    let resumed = Session::resume(log.clone(), s.id()).expect("resume");
+    let back = resumed.progress().expect("progress");
+    assert_eq!(resumed.digest(), s.digest());
+    assert_eq!(
+        (back.samples, back.samples_in_figures, back.sample_block),
+        (live.samples, live.samples_in_figures, 1)
+    );
+    let (a, b) = (live.collected_utility_nats, back.collected_utility_nats);
+    assert!((a - b).abs() < 1e-9 * a, "{a} vs {b}");
+    for (x, y) in live.uncertainty.iter().zip(&back.uncertainty) {
+        assert!(
+            (x.std_db - y.std_db).abs() < 1e-7 * (1.0 + x.std_db),
+            "{x:?} vs {y:?}"
+        );
+    }
+    let scratch = resumed.collected_utility_from_scratch().expect("scratch");
+    assert!((b - scratch).abs() < 1e-9 * scratch, "{b} vs {scratch}");
+}
