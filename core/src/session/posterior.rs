@@ -881,6 +881,47 @@ mod tests {
         }
     }
 
+    /// Runs end where the floor changes (a sample on another floor tells nothing about
+    /// this one's vertices, and keeping one sample for both floors would drop one).
+    #[test]
+    fn runs_of_samples_end_where_the_floor_changes() {
+        let (b, k) = demo();
+        // Seven samples on the ground floor, then seven on a floor above (no vertices
+        // there), and so on.
+        let samples: Vec<(Point, f64)> = robot_samples(&b, 280)
+            .into_iter()
+            .enumerate()
+            .map(|(i, (p, x))| (Point::new(p.x, p.y, ((i / 7) % 2) as i64), x))
+            .collect();
+        let np = b.pilot.len();
+        let mut post =
+            IncrementalPosterior::new(&b, k, 2 * posterior_bytes(np + 100, b.len())).expect("fits");
+        for &(p, x) in &samples {
+            post.add(p, x).expect("add");
+        }
+        // 280 samples in runs of 4 cut at every 7: 40 blocks of 7, each runs of 4 and 3;
+        // the last run waits for the end.
+        assert_eq!(post.block(), 4);
+        assert_eq!((post.rows.len(), post.samples_in_figures()), (np + 79, 277));
+        post.flush().expect("flush");
+        assert_eq!(post.rows.len(), np + 80);
+        for (i, &kept) in post.rows[np..].iter().enumerate() {
+            let seg = np + 7 * (i / 2);
+            let run = if i % 2 == 0 {
+                seg..seg + 4
+            } else {
+                seg + 4..seg + 7
+            };
+            assert!(run.contains(&kept), "row {i}: {kept} not in {run:?}");
+        }
+        let (u, _) = from_scratch(&b, &k, &observations(&b, &samples), &post.rows);
+        assert!(
+            (post.utility() - u).abs() < 1e-9 * u,
+            "{} vs {u}",
+            post.utility()
+        );
+    }
+
     #[test]
     fn a_budget_too_small_for_the_vertices_is_refused_with_the_size_needed() {
         let (b, k) = demo();
