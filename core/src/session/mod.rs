@@ -229,9 +229,15 @@ impl Session {
         let kernel = plan.record.kernel;
         let planned_utility =
             UtilityEngine::new(building.clone(), kernel, settings.surveyor)?.utility(&walk)?;
-        let posterior_bytes = usize::try_from(settings.options.memory_budget_mb)
+        let mut posterior_bytes = usize::try_from(settings.options.memory_budget_mb)
             .unwrap_or(usize::MAX)
             .saturating_mul(1 << 20);
+        // A new session with a budget too small for the building is refused (nothing is
+        // written); a stored one opens anyway, with the least that holds the building, so
+        // that what was walked can always be read back.
+        if id != 0 {
+            posterior_bytes = posterior_bytes.max(IncrementalPosterior::least_memory(&building));
+        }
         let posterior = IncrementalPosterior::new(&building, kernel, posterior_bytes)?;
         let tracker = Tracker::new(
             id,

@@ -200,7 +200,7 @@ impl IncrementalPosterior {
         let half = memory_bytes / 2;
         // Room for the pilot rows and at least two sample rows.
         let need = posterior_bytes(pilot.len() + 2, nv);
-        if need > half {
+        if memory_bytes < Self::least_memory(building) {
             return Err(Error::InvalidRequest(format!(
                 "the session's running posterior of {nv} vertices and {} pilot points \
                  needs at least {} MiB, half a memory budget of {} MiB: raise the \
@@ -237,6 +237,12 @@ impl IncrementalPosterior {
         }
         post.n_prior = post.pts.len();
         Ok(post)
+    }
+
+    /// The least memory budget [`Self::new`] takes for `building`: room for the
+    /// vertices' factor, the pilot rows and two sample rows, in half of it.
+    pub fn least_memory(building: &Building) -> usize {
+        2 * posterior_bytes(building.pilot.len() + 2, building.len())
     }
 
     /// No observation yet.

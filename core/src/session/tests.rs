@@ -886,3 +886,56 @@ fn resuming_a_long_session_factors_its_samples_at_once_and_agrees_with_the_live_
     let scratch = resumed.collected_utility_from_scratch().expect("scratch");
     assert!((b - scratch).abs() < 1e-9 * scratch, "{b} vs {scratch}");
 }
+
+/// A new session whose memory budget cannot hold the building's running figures (half of
+/// 1 MiB, on a two-floor campus of 290 vertices) is refused with the size it needs, and
+/// writes nothing: the next session started gets the first id.
+#[test]
+fn a_session_whose_memory_budget_cannot_hold_the_building_is_refused_and_writes_nothing() {
+    use crate::synth::{SynthParams, generate};
+    let params = SynthParams {
+        name: "campus".into(),
+        floors: 2,
+        rooms_per_side: 6,
+        corridor_length_m: 48.0,
+        room_depth_m: 8.0,
+        ..SynthParams::default()
+    };
+    let b = Arc::new(
+        Building::from_file(generate(&params).expect("generate").file, "campus").expect("valid"),
+    );
+    let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
+    let log = Arc::new(MemoryLog::new());
+    let bid = log.add_building(b.clone());
+    let (v0, v1) = (
+        b.vertices[0].id.clone(),
+        b.vertices[b.neighbours(0)[0].0].id.clone(),
+    );
+    let walk = [v0.as_str(), v1.as_str(), v0.as_str()];
+    let plan = log
+        .save_plan(&PlanData::for_walk(
+            bid,
+            &walk,
+            100.0,
+            k,
+            b.walk_length(&[0, b.neighbours(0)[0].0, 0]),
+        ))
+        .expect("save");
+    let tiny = SessionOptions {
+        memory_budget_mb: 1,
+        ..SessionOptions::default()
+    };
+    let e = Session::start(log.clone(), plan, Surveyor::human(), tiny).expect_err("1 MiB");
+    let need = posterior::IncrementalPosterior::least_memory(&b).div_ceil(1 << 20);
+    let text = e.to_string();
+    assert!(text.contains(&format!("{need} MiB")), "{text}");
+    assert!(text.contains("memory_budget_mb"), "{text}");
+    let s = Session::start(
+        log.clone(),
+        plan,
+        Surveyor::human(),
+        SessionOptions::default(),
+    )
+    .expect("the default holds it");
+    assert_eq!(s.id(), 1, "the refused session took no id");
+}
