@@ -15,6 +15,7 @@ import dev.trailprint.ffi.BundleImportSummary
 import dev.trailprint.ffi.TeamPlanRequest
 import dev.trailprint.ffi.TeamPlanSummary
 import dev.trailprint.ffi.TrailprintStore
+import dev.trailprint.ffi.defaultSessionOptions
 import kotlinx.coroutines.CoroutineDispatcher
 import kotlinx.coroutines.Dispatchers
 import kotlinx.coroutines.channels.awaitClose
@@ -60,18 +61,43 @@ class RunningTeamPlan internal constructor(val events: Flow<TeamPlanEvent>, priv
  * cancels the native plan. Errors arrive as `TrailprintException` subclasses.
  *
  * One instance per database file; safe to share between view models.
+ *
+ * [memoryBudgetMb] is what the device allows the engine, MiB ([DeviceMemory.budgetMb] on a
+ * phone; null: the library's default, 512): every plan, team plan and session started
+ * here gets it, unless its request or options already name a budget.
  */
 class Trailprint(
     val store: TrailprintStore,
     private val io: CoroutineDispatcher = Dispatchers.IO,
+    val memoryBudgetMb: ULong? = null,
 ) : AutoCloseable {
     companion object {
         /** Opens (or creates) the database at [path]. */
-        suspend fun open(path: String, io: CoroutineDispatcher = Dispatchers.IO): Trailprint =
-            withContext(io) { Trailprint(TrailprintStore.open(path), io) }
+        suspend fun open(path: String, io: CoroutineDispatcher = Dispatchers.IO, memoryBudgetMb: ULong? = null): Trailprint =
+            withContext(io) { Trailprint(TrailprintStore.open(path), io, memoryBudgetMb) }
 
         /** A database in memory (tests and previews). */
-        fun inMemory(io: CoroutineDispatcher = Dispatchers.IO): Trailprint = Trailprint(TrailprintStore.openInMemory(), io)
+        fun inMemory(io: CoroutineDispatcher = Dispatchers.IO, memoryBudgetMb: ULong? = null): Trailprint =
+            Trailprint(TrailprintStore.openInMemory(), io, memoryBudgetMb)
+    }
+
+    /** [request] with this instance's [memoryBudgetMb] when it names none. */
+    internal fun budgeted(request: PlanRequest): PlanRequest =
+        if (memoryBudgetMb == null || request.memoryBudgetMb != null) request else request.copy(memoryBudgetMb = memoryBudgetMb)
+
+    /** [request] with this instance's [memoryBudgetMb] when it names none. */
+    internal fun budgeted(request: TeamPlanRequest): TeamPlanRequest =
+        if (memoryBudgetMb == null || request.memoryBudgetMb != null) request else request.copy(memoryBudgetMb = memoryBudgetMb)
+
+    /**
+     * The options a session started here runs with: [options] (the core's defaults when
+     * null) with this instance's [memoryBudgetMb] unless [options] names a budget.
+     */
+    internal fun budgeted(options: SessionOptions?): SessionOptions? = when {
+        memoryBudgetMb == null -> options
+        options == null -> defaultSessionOptions().copy(memoryBudgetMb = memoryBudgetMb)
+        options.memoryBudgetMb == null -> options.copy(memoryBudgetMb = memoryBudgetMb)
+        else -> options
     }
 
     suspend fun importBuilding(json: String, origin: String, replace: Boolean = false): BuildingSummary =
@@ -119,7 +145,7 @@ class Trailprint(
      * carrying the best walk found so far (termination "cancelled"), saved like any plan.
      * Cancelling the collecting coroutine instead stops the planner and drops the result.
      */
-    fun startPlan(request: PlanRequest): RunningPlan = store.newPlan(request).let { job ->
+    fun startPlan(request: PlanRequest): RunningPlan = store.newPlan(budgeted(request)).let { job ->
         val (events, stop) = running(job::run, job::cancel, job::close, PlanEvent::Progress, PlanEvent::Done)
         RunningPlan(events, stop)
     }
@@ -129,7 +155,7 @@ class Trailprint(
      * [RunningTeamPlan.stop] is the user's Cancel (the walks so far are saved and returned),
      * cancelling the collecting coroutine stops the planner and drops the result.
      */
-    fun startTeamPlan(request: TeamPlanRequest): RunningTeamPlan = store.newTeamPlan(request).let { job ->
+    fun startTeamPlan(request: TeamPlanRequest): RunningTeamPlan = store.newTeamPlan(budgeted(request)).let { job ->
         val (events, stop) = running(job::run, job::cancel, job::close, TeamPlanEvent::Progress, TeamPlanEvent::Done)
         RunningTeamPlan(events, stop)
     }
@@ -171,9 +197,12 @@ class Trailprint(
         return events to { if (!closed.get()) cancelJob() }
     }
 
-    /** Starts a survey session on a saved plan. */
+    /**
+     * Starts a survey session on a saved plan, within [memoryBudgetMb] unless [options]
+     * names a budget (its replans may use all of it, its running figures half).
+     */
     suspend fun startSession(planId: Long, surveyor: SurveyorProfile, options: SessionOptions? = null): SurveySession =
-        withContext(io) { store.startSession(planId, surveyor, options) }
+        withContext(io) { store.startSession(planId, surveyor, budgeted(options)) }
 
     /** Reopens a stored session where its log ends. */
     suspend fun resumeSession(sessionId: Long): SurveySession = withContext(io) { store.resumeSession(sessionId) }
@@ -181,7 +210,7 @@ class Trailprint(
     suspend fun sessions(buildingId: Long): List<SessionInfo> = withContext(io) { store.listSessions(buildingId) }
 
     /** Plans walks for several surveyors that complement each other; one saved plan per member. */
-    suspend fun planTeam(request: TeamPlanRequest): TeamPlanSummary = withContext(io) { store.planTeam(request) }
+    suspend fun planTeam(request: TeamPlanRequest): TeamPlanSummary = withContext(io) { store.planTeam(budgeted(request)) }
 
     /** A bundle of the building's survey sessions (JSON text) to share with another device. */
     suspend fun exportBundle(buildingId: Long, device: String? = null, surveyorName: String? = null): String =

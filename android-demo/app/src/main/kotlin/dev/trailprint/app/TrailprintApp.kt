@@ -1,7 +1,9 @@
 package dev.trailprint.app
 
+import android.app.ActivityManager
 import android.app.Application
 import android.os.Build
+import dev.trailprint.DeviceMemory
 import dev.trailprint.Trailprint
 import dev.trailprint.ffi.TrailprintStore
 import dev.trailprint.files.ExportFiles
@@ -25,7 +27,11 @@ data class IncomingFile(val name: String, val text: String)
  */
 class TrailprintApp : Application() {
     val api: Trailprint by lazy {
-        Trailprint(TrailprintStore.open(File(filesDir, "trailprint.db").path))
+        // The engine's memory budget from this phone's RAM (DeviceMemory's rule), in every plan and session.
+        val activityManager = getSystemService(ActivityManager::class.java)
+        val memoryInfo = ActivityManager.MemoryInfo().also { activityManager.getMemoryInfo(it) }
+        val budgetMb = DeviceMemory.budgetMb(memoryInfo.totalMem, activityManager.isLowRamDevice)
+        Trailprint(TrailprintStore.open(File(filesDir, "trailprint.db").path), memoryBudgetMb = budgetMb)
     }
 
     val activeSurvey: ActiveSurveyFile by lazy { ActiveSurveyFile(File(filesDir, "active-survey.json")) }

@@ -209,7 +209,7 @@ class CoordinatorModel(
         // One carrier session per plan, so that the bundle carries the plans (see WalkFiles).
         withContext(io) {
             team.planIds.forEachIndexed { i, planId ->
-                api.store.startSession(planId, surveyor, null).use { c ->
+                api.startSession(planId, surveyor).use { c ->
                     c.abort(clock(), "carries team walk ${i + 1} of ${team.planIds.size} to its surveyor")
                 }
             }
