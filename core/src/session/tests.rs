@@ -621,20 +621,10 @@ fn a_robot_that_follows_the_plan_gets_no_reserve_and_exactly_the_planned_utility
     assert!(utility_gap(&sum) < 1e-12, "{sum:?}");
 }
 
-/// A session replans with `auto` on a building of more than
-/// [`replan::LARGE_REPLAN_VERTICES`] vertices (the session greedy takes seconds there and
-/// plans short-sighted walks) and with the session greedy on a small one; either way the
-/// new walk starts where the surveyor is and fits what is left.
-#[test]
-fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() {
-    use crate::plan::{Algorithm, PlanOrigin};
+/// A generated two-floor campus of 290 vertices (more than
+/// [`replan::LARGE_REPLAN_VERTICES`]).
+fn campus() -> Arc<Building> {
     use crate::synth::{SynthParams, generate};
-
-    let (log, mut small) = setup(40.0, Surveyor::human());
-    let r = small.replan().expect("replan");
-    let origin = log.load_plan(r.plan_id).expect("plan").record.algorithm;
-    assert_eq!(origin, PlanOrigin::SessionGreedy);
-
     let params = SynthParams {
         name: "campus".into(),
         floors: 2,
@@ -643,9 +633,25 @@ fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() 
         room_depth_m: 8.0,
         ..SynthParams::default()
     };
-    let b = Arc::new(
+    Arc::new(
         Building::from_file(generate(&params).expect("generate").file, "campus").expect("valid"),
-    );
+    )
+}
+
+/// A session replans with `auto` on a building of more than
+/// [`replan::LARGE_REPLAN_VERTICES`] vertices (the session greedy takes seconds there and
+/// plans short-sighted walks) and with the session greedy on a small one; either way the
+/// new walk starts where the surveyor is and fits what is left.
+#[test]
+fn a_large_building_replans_with_auto_and_a_small_one_with_the_session_greedy() {
+    use crate::plan::{Algorithm, PlanOrigin};
+
+    let (log, mut small) = setup(40.0, Surveyor::human());
+    let r = small.replan().expect("replan");
+    let origin = log.load_plan(r.plan_id).expect("plan").record.algorithm;
+    assert_eq!(origin, PlanOrigin::SessionGreedy);
+
+    let b = campus();
     assert!(
         b.len() > replan::LARGE_REPLAN_VERTICES,
         "{} vertices",
@@ -892,18 +898,7 @@ fn resuming_a_long_session_factors_its_samples_at_once_and_agrees_with_the_live_
 /// writes nothing: the next session started gets the first id.
 #[test]
 fn a_session_whose_memory_budget_cannot_hold_the_building_is_refused_and_writes_nothing() {
-    use crate::synth::{SynthParams, generate};
-    let params = SynthParams {
-        name: "campus".into(),
-        floors: 2,
-        rooms_per_side: 6,
-        corridor_length_m: 48.0,
-        room_depth_m: 8.0,
-        ..SynthParams::default()
-    };
-    let b = Arc::new(
-        Building::from_file(generate(&params).expect("generate").file, "campus").expect("valid"),
-    );
+    let b = campus();
     let k = crate::gp::fit_kernel(&b.pilot).expect("fit").kernel;
     let log = Arc::new(MemoryLog::new());
     let bid = log.add_building(b.clone());
