@@ -1,6 +1,5 @@
 package dev.trailprint
 
-import dev.trailprint.demo.SimulatedWifi
 import dev.trailprint.ffi.BuildingMap
 import dev.trailprint.ffi.PlanAlgorithm
 import dev.trailprint.ffi.PlanRequest
@@ -11,13 +10,10 @@ import dev.trailprint.ffi.TeamMember
 import dev.trailprint.ffi.TeamPlanRequest
 import dev.trailprint.ffi.TrailprintException
 import dev.trailprint.ffi.TrailprintStore
-import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultRobotProfile
 import dev.trailprint.ffi.defaultSessionOptions
-import dev.trailprint.robot.SimulatedRobot
-import dev.trailprint.robot.SimulatedRobotConfig
-import dev.trailprint.robot.Waypoint
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.driveRobotAlong
 import dev.trailprint.testing.greedyPlan
 import kotlin.test.Test
 import kotlin.test.assertEquals
@@ -34,47 +30,36 @@ class MemoryBudgetTest {
     private val gib = 1L shl 30
     private val mib = 1L shl 20
 
+    /**
+     * An eighth of the RAM, at most the engine's default (512 MiB) and at least 64 MiB; a
+     * sixteenth on a low-RAM device. Rows: RAM in bytes, low-RAM flag, budget in MiB.
+     */
     @Test
-    fun theBudgetIsAnEighthOfTheRamAtMostTheEnginesDefaultAndAtLeast64MiB() {
-        assertEquals(256uL, DeviceMemory.budgetMb(2 * gib, lowRam = false))
-        assertEquals(384uL, DeviceMemory.budgetMb(3 * gib, lowRam = false))
-        assertEquals(512uL, DeviceMemory.budgetMb(4 * gib, lowRam = false))
-        assertEquals(512uL, DeviceMemory.budgetMb(8 * gib, lowRam = false))
-        assertEquals(512uL, DeviceMemory.budgetMb(64 * gib, lowRam = false))
-        // totalMem is what the kernel has, a little under the advertised size.
-        assertEquals(240uL, DeviceMemory.budgetMb(1920 * mib, lowRam = false))
-        assertEquals(64uL, DeviceMemory.budgetMb(512 * mib, lowRam = false))
-        assertEquals(64uL, DeviceMemory.budgetMb(0, lowRam = false))
-        assertEquals(64uL, DeviceMemory.budgetMb(-1, lowRam = false))
-    }
-
-    @Test
-    fun aLowRamDeviceGetsASixteenthAtLeast64MiB() {
-        assertEquals(64uL, DeviceMemory.budgetMb(1 * gib, lowRam = true))
-        assertEquals(64uL, DeviceMemory.budgetMb(512 * mib, lowRam = true))
-        assertEquals(128uL, DeviceMemory.budgetMb(2 * gib, lowRam = true))
-        assertEquals(512uL, DeviceMemory.budgetMb(16 * gib, lowRam = true))
+    fun theBudgetIsAnEighthOfTheRamOrASixteenthOnALowRamDeviceFrom64To512MiB() {
+        val rows = listOf(
+            Triple(2 * gib, false, 256uL),
+            Triple(3 * gib, false, 384uL),
+            Triple(4 * gib, false, 512uL),
+            Triple(8 * gib, false, 512uL),
+            Triple(64 * gib, false, 512uL),
+            // totalMem is what the kernel has, a little under the advertised size.
+            Triple(1920 * mib, false, 240uL),
+            Triple(512 * mib, false, 64uL),
+            Triple(0L, false, 64uL),
+            Triple(-1L, false, 64uL),
+            Triple(1 * gib, true, 64uL),
+            Triple(512 * mib, true, 64uL),
+            Triple(2 * gib, true, 128uL),
+            Triple(16 * gib, true, 512uL),
+        )
+        for ((ram, lowRam, want) in rows) {
+            assertEquals(want, DeviceMemory.budgetMb(ram, lowRam), "RAM $ram bytes, low-RAM $lowRam")
+        }
     }
 
     /** Drives a simulated robot along [plan] with 640 scans, then finishes and closes [session]. */
-    private fun drive(session: SurveySession, map: BuildingMap, plan: PlanSummary): SessionSummary = session.use { s ->
-        val byId = map.vertices.associateBy { it.id }
-        val waypoints = plan.walk.map { id -> byId.getValue(id).let { Waypoint(id, it.x, it.y, it.floor) } }
-        val wifi = SimulatedWifi(map, seed = 2)
-        val t0 = 1_700_000_000_000L
-        val robot = SimulatedRobot(SimulatedRobotConfig(speed = plan.lengthM / 640, poseIntervalMs = 1000, seed = 2, timeScale = 0.0, startTimeMs = t0))
-        var t = t0
-        var lastScan: Long? = null
-        for (p in robot.trajectory(waypoints)) {
-            t = p.timestampMs
-            s.robotPose(t, p.x, p.y, p.floor)
-            if (lastScan == null || t - lastScan >= 1000) {
-                lastScan = t
-                s.scan(t, wifi.scanAt(t, p.x, p.y, p.floor).readings.map { WifiReading(it.bssid, it.rssDbm.toDouble()) })
-            }
-        }
-        s.finish(t + 1000)
-    }
+    private fun drive(session: SurveySession, map: BuildingMap, plan: PlanSummary): SessionSummary =
+        session.use { it.driveRobotAlong(map, plan.walk, plan.lengthM, 640) }
 
     @Test
     fun aTrailprintWithTheDevicesBudgetPassesItToPlansTeamPlansAndSessions() = runBlocking {

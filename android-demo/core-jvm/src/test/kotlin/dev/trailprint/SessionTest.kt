@@ -15,9 +15,6 @@ import dev.trailprint.ffi.WifiReading
 import dev.trailprint.ffi.defaultHumanProfile
 import dev.trailprint.ffi.defaultRobotProfile
 import dev.trailprint.ffi.defaultSessionOptions
-import dev.trailprint.robot.SimulatedRobot
-import dev.trailprint.robot.SimulatedRobotConfig
-import dev.trailprint.robot.Waypoint
 import dev.trailprint.survey.LifecycleState
 import dev.trailprint.survey.SurveyController
 import dev.trailprint.survey.SurveyLive
@@ -25,6 +22,7 @@ import dev.trailprint.survey.SurveyNotificationPolicy
 import dev.trailprint.survey.SurveyPhase
 import dev.trailprint.testing.ScratchDir
 import dev.trailprint.testing.TestData
+import dev.trailprint.testing.driveRobotAlong
 import dev.trailprint.testing.greedyPlan
 import dev.trailprint.ui.FinishState
 import dev.trailprint.ui.SurveyUiState
@@ -240,26 +238,8 @@ class SessionTest : ScratchDir("trailprint-session-test") {
         scans: Int,
         check: (SessionProgress) -> Unit = {},
     ): Pair<SessionSummary, Int> = store.startSession(planId, defaultRobotProfile(), options).use { s ->
-        val byId = map.vertices.associateBy { it.id }
         val plan = store.getPlan(planId)
-        val waypoints = plan.walk.map { id -> byId.getValue(id).let { Waypoint(id, it.x, it.y, it.floor) } }
-        val wifi = SimulatedWifi(map, seed = 2)
-        val speed = plan.lengthM / scans
-        val robot = SimulatedRobot(SimulatedRobotConfig(speed = speed, poseIntervalMs = 1000, seed = 2, timeScale = 0.0, startTimeMs = t0))
-        var lastScan: Long? = null
-        var scanned = 0
-        var t = t0
-        for (p in robot.trajectory(waypoints)) {
-            t = p.timestampMs
-            s.robotPose(t, p.x, p.y, p.floor)
-            if (lastScan == null || t - lastScan >= 1000) {
-                lastScan = t
-                val scan = wifi.scanAt(t, p.x, p.y, p.floor)
-                s.scan(t, scan.readings.map { WifiReading(it.bssid, it.rssDbm.toDouble()) })
-                if (++scanned % 20 == 0) check(s.progress())
-            }
-        }
-        s.finish(t + 1000) to s.samples().size
+        s.driveRobotAlong(map, plan.walk, plan.lengthM, scans, t0, check) to s.samples().size
     }
 
     @Test
