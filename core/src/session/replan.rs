@@ -47,6 +47,11 @@ pub trait Replanner: Send + Sync {
     }
     /// Where its walks come from, stored with the plan (`algorithm`).
     fn origin(&self) -> PlanOrigin;
+    /// The time a replan may take, when it stops on a clock; `None` for a replanner that
+    /// runs to completion (the session then may ask it twice, see `Session::replan`).
+    fn time_limit(&self) -> Option<std::time::Duration> {
+        None
+    }
 }
 
 /// Greedy on utility gain per metre with a short look-ahead: at each step it tries every
@@ -194,9 +199,7 @@ pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>>
     Ok(out)
 }
 
-/// Time limit of a replan by `auto` on a large building ([`default_replanner`]). A replan
-/// may plan twice (once more with a wider reserve for wrong turns), so a surveyor waits
-/// at most about twice this. Measured with `examples/replan_compare` (one core, from
+/// Time limit of a replan by `auto` on a large building ([`default_replanner`]). Measured with `examples/replan_compare` (one core, from
 /// 20%, 50% and 80% of an auto plan): 1 s adds within 3% of what 2 s adds (campus robot
 /// 446 m: 117.25 / 72.39 / 24.31 nats against 116.19 / 72.12 / 24.34; mall person
 /// 509 m: 45.59 / 24.98 / 6.55 against 46.84 / 24.44 / 6.55).
@@ -309,5 +312,9 @@ impl Replanner for PlannerReplanner {
 
     fn origin(&self) -> PlanOrigin {
         PlanOrigin::Planner(self.algorithm)
+    }
+
+    fn time_limit(&self) -> Option<std::time::Duration> {
+        self.time_limit
     }
 }

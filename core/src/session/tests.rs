@@ -934,3 +934,58 @@ fn a_session_whose_memory_budget_cannot_hold_the_building_is_refused_and_writes_
     .expect("the default holds it");
     assert_eq!(s.id(), 1, "the refused session took no id");
 }
+
+/// A replanner that stops on a clock is asked once a replan, so that the surveyor waits
+/// no longer than its limit; the reserve the session keeps still covers the way home from
+/// the farthest point of the walk it planned (with the wrong-turn rate of that moment).
+#[test]
+fn a_time_limited_replanner_plans_once_and_the_reserve_covers_its_walk() {
+    use std::sync::atomic::{AtomicU32, Ordering};
+
+    #[derive(Default)]
+    struct Counting {
+        calls: AtomicU32,
+    }
+    impl Replanner for Counting {
+        fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
+            self.calls.fetch_add(1, Ordering::SeqCst);
+            GreedyReplanner.replan(r)
+        }
+        fn origin(&self) -> crate::plan::PlanOrigin {
+            crate::plan::PlanOrigin::SessionGreedy
+        }
+        fn time_limit(&self) -> Option<std::time::Duration> {
+            Some(std::time::Duration::from_secs(1))
+        }
+    }
+
+    let counting = Arc::new(Counting::default());
+    let (_, mut s) = demo_session(Surveyor::human(), 200.0);
+    s.set_replanner(counting.clone());
+    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+    let mut covered = 0;
+    let (sum, _) = simulate(&mut s, &world, &deviating(0.3), |s, _, ack| {
+        // A replan whose budget left cannot do better than the way home asks nobody.
+        assert!(counting.calls.load(Ordering::SeqCst) <= s.tracker().replans());
+        if ack.replan_seq.is_some() && s.reserve_m() > 0.0 {
+            let b = s.building();
+            let to_end = replan::distances_from(b, s.tracker().end());
+            let ahead: Vec<usize> = s
+                .route_ahead()
+                .iter()
+                .filter_map(|w| b.vertex_index(&w.vertex))
+                .collect();
+            let (origin, left) = s.tracker().replan_origin(b).expect("origin");
+            let home = to_end[origin];
+            let farthest = ahead.iter().map(|&v| to_end[v]).fold(home, f64::max);
+            // At most what is left beyond the way home.
+            let need = s.deviation_reserve(farthest, &to_end).min(left - home);
+            assert!(need <= s.reserve_m() + 1e-9, "{need} > {}", s.reserve_m());
+            covered += 1;
+        }
+        Ok(())
+    })
+    .expect("sim");
+    assert!(counting.calls.load(Ordering::SeqCst) >= 2, "{sum:?}");
+    assert!(covered >= 1, "no replan kept a reserve: {sum:?}");
+}
