@@ -409,6 +409,12 @@ impl Tracker {
             .unwrap_or(self.route.len() - 1)
     }
 
+    /// The planned route from the vertex the surveyor was last heading to on it (after a
+    /// wrong turn too: where they left it) to the end.
+    pub fn route_remaining(&self) -> &[usize] {
+        &self.route[self.heading()..]
+    }
+
     /// Where a replan starts and the budget left for it: the vertex the surveyor is at or
     /// walking to, and the budget minus what was walked and what it takes to get there.
     pub fn replan_origin(&self, b: &Building) -> Result<(usize, f64)> {
