@@ -101,7 +101,6 @@ fn main() -> trailprint::Result<()> {
                 budget_m: budget - walked,
                 seed: 1,
                 memory_budget: trailprint::plan::PlanSettings::default().memory_budget,
-                time_limit: None,
             })?;
             let secs = t0.elapsed().as_secs_f64();
             println!(

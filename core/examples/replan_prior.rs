@@ -64,7 +64,6 @@ fn main() -> trailprint::Result<()> {
                 budget_m: budget,
                 seed: 1,
                 memory_budget: 512 << 20,
-                time_limit: None,
             })?;
             let replan_s = t.elapsed().as_secs_f64();
             // What the session paid after every replan before the replanner's own

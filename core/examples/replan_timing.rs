@@ -47,7 +47,6 @@ fn main() -> trailprint::Result<()> {
             budget_m: 600.0,
             seed,
             memory_budget: 512 << 20,
-            time_limit: None,
         };
         let t = Instant::now();
         let w = r.replan(&req)?;

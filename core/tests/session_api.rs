@@ -314,7 +314,6 @@ fn sessions_are_send_and_replay_is_fast() {
             budget_m: 150.0,
             seed: 1,
             memory_budget: trailprint::plan::PlanSettings::default().memory_budget,
-            time_limit: None,
         },
     )
     .expect("plan");

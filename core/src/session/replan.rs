@@ -31,9 +31,6 @@ pub struct ReplanRequest<'a> {
     pub seed: u64,
     /// Most memory the replan may use, bytes ([`crate::plan::PlanSettings::memory_budget`]).
     pub memory_budget: u64,
-    /// At most this long, when shorter than the replanner's own limit
-    /// ([`Replanner::time_limit`]); `None`: the replanner's own.
-    pub time_limit: Option<std::time::Duration>,
 }
 
 /// A walk planner usable for replanning.
@@ -51,7 +48,8 @@ pub trait Replanner: Send + Sync {
     /// Where its walks come from, stored with the plan (`algorithm`).
     fn origin(&self) -> PlanOrigin;
     /// The time a replan may take, when it stops on a clock; `None` for a replanner that
-    /// runs to completion (the session then may ask it twice, see `Session::replan`).
+    /// runs to completion (the session then may ask it twice, see `Session::replan`; a
+    /// time-limited one is asked once).
     fn time_limit(&self) -> Option<std::time::Duration> {
         None
     }
@@ -208,12 +206,6 @@ pub fn shortest_path(b: &Building, from: usize, to: usize) -> Result<Vec<usize>>
 /// 509 m: 45.59 / 24.98 / 6.55 against 46.84 / 24.44 / 6.55).
 pub const LARGE_REPLAN_LIMIT: std::time::Duration = std::time::Duration::from_secs(1);
 
-/// A replan that keeps a reserve for wrong turns may plan twice (`Session::replan`: once
-/// more when the new walk goes farther from the end than the reserve allows); a
-/// replanner with a time limit then gets this share of it for the second plan and the
-/// rest for the first, so that the surveyor waits no longer than the limit.
-pub const SECOND_PLAN_SHARE: f64 = 0.25;
-
 /// Buildings with more vertices than this replan with `auto` by default
 /// ([`default_replanner`]). The session-greedy's evaluations factorise the posterior of
 /// every vertex for every path it tries, so its time grows with the cube of the vertex
@@ -284,10 +276,7 @@ impl Replanner for PlannerReplanner {
     /// The planner's own exact utility of its walk comes along.
     fn replan_scored(&self, r: &ReplanRequest<'_>) -> Result<(Vec<usize>, Option<f64>)> {
         let b = r.building;
-        let time_limit = match (self.time_limit, r.time_limit) {
-            (Some(own), Some(asked)) => Some(own.min(asked)),
-            (own, asked) => own.or(asked),
-        };
+        let time_limit = self.time_limit;
         let settings = crate::plan::PlanSettings {
             model: r.model,
             algorithm: self.algorithm,

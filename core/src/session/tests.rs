@@ -318,7 +318,6 @@ fn demo_session_with(
             budget_m: budget,
             seed: 1,
             memory_budget: SessionOptions::default().memory_budget_mb << 20,
-            time_limit: None,
         })
         .expect("plan");
     let ids = b.walk_ids(&walk);
@@ -708,7 +707,6 @@ fn replans_on_one_building_share_its_metric_closure_and_plan_as_without() {
         budget_m,
         seed: 3,
         memory_budget: SessionOptions::default().memory_budget_mb << 20,
-        time_limit: None,
     };
     let replanner = PlannerReplanner::new(crate::plan::Algorithm::Greedy);
     for (start, budget) in [(0, 40.0), (5, 35.0), (0, 60.0)] {
@@ -734,7 +732,6 @@ fn a_replan_keeps_to_the_sessions_memory_budget() {
         budget_m: 20.0,
         seed: 1,
         memory_budget: memory_budget_mb << 20,
-        time_limit: None,
     };
     let replanner = PlannerReplanner::new(crate::plan::Algorithm::Coverage);
     let e = replanner
@@ -938,64 +935,72 @@ fn a_session_whose_memory_budget_cannot_hold_the_building_is_refused_and_writes_
     assert_eq!(s.id(), 1, "the refused session took no id");
 }
 
-/// A replanner that stops on a clock is asked at most twice a replan, for shares of its
-/// limit that add up to no more than it, so that the surveyor waits no longer; the reserve
-/// the session keeps covers the way home from the farthest point of the walk it planned
-/// (with the wrong-turn rate of that moment).
+/// A replanner that stops on a clock is asked once a replan, so that the surveyor waits no
+/// longer than its limit. One that runs to completion may be asked twice, and then the
+/// reserve the session keeps covers the way home from the farthest point of the walk it
+/// planned (with the wrong-turn rate of that moment).
 #[test]
-fn a_time_limited_replan_keeps_its_limit_and_the_reserve_covers_its_walk() {
-    use std::sync::Mutex;
+fn a_time_limited_replan_plans_once_and_an_untimed_one_keeps_a_reserve_for_its_walk() {
+    use std::sync::atomic::{AtomicU32, Ordering};
     use std::time::Duration;
-    const LIMIT: Duration = Duration::from_secs(1);
 
-    #[derive(Default)]
-    struct Asking {
-        asked: Mutex<Vec<Option<Duration>>>,
+    struct Counting {
+        limit: Option<Duration>,
+        asked: AtomicU32,
     }
-    impl Replanner for Asking {
+    impl Replanner for Counting {
         fn replan(&self, r: &ReplanRequest<'_>) -> Result<Vec<usize>> {
-            self.asked.lock().expect("lock").push(r.time_limit);
+            self.asked.fetch_add(1, Ordering::SeqCst);
             GreedyReplanner.replan(r)
         }
         fn origin(&self) -> crate::plan::PlanOrigin {
             crate::plan::PlanOrigin::SessionGreedy
         }
         fn time_limit(&self) -> Option<Duration> {
-            Some(LIMIT)
+            self.limit
         }
     }
 
-    let asking = Arc::new(Asking::default());
-    let (_, mut s) = demo_session(Surveyor::human(), 200.0);
-    s.set_replanner(asking.clone());
-    let world = World::for_building(s.building(), &kernel(), 3).expect("world");
-    let (mut covered, mut twice) = (0, 0);
-    let (sum, _) = simulate(&mut s, &world, &deviating(0.3), |s, _, ack| {
-        let asked: Vec<_> = asking.asked.lock().expect("lock").drain(..).collect();
-        assert!(asked.len() <= 2, "{asked:?}");
-        let total: Duration = asked.iter().map(|a| a.unwrap_or(LIMIT)).sum();
-        assert!(total <= LIMIT, "{asked:?}");
-        twice += usize::from(asked.len() == 2);
-        if ack.replan_seq.is_some() && s.reserve_m() > 0.0 {
-            let b = s.building();
-            let to_end = replan::distances_from(b, s.tracker().end());
-            let ahead: Vec<usize> = s
-                .route_ahead()
-                .iter()
-                .filter_map(|w| b.vertex_index(&w.vertex))
-                .collect();
-            let (origin, left) = s.tracker().replan_origin(b).expect("origin");
-            let home = to_end[origin];
-            let farthest = ahead.iter().map(|&v| to_end[v]).fold(home, f64::max);
-            // At most what is left beyond the way home.
-            let need = s.deviation_reserve(farthest, &to_end).min(left - home);
-            assert!(need <= s.reserve_m() + 1e-9, "{need} > {}", s.reserve_m());
-            covered += 1;
+    for limit in [Some(Duration::from_secs(1)), None] {
+        let counting = Arc::new(Counting {
+            limit,
+            asked: AtomicU32::new(0),
+        });
+        let (_, mut s) = demo_session(Surveyor::human(), 200.0);
+        s.set_replanner(counting.clone());
+        let world = World::for_building(s.building(), &kernel(), 3).expect("world");
+        let (mut covered, mut twice) = (0, 0);
+        let (sum, _) = simulate(&mut s, &world, &deviating(0.3), |s, _, ack| {
+            let asked = counting.asked.swap(0, Ordering::SeqCst);
+            twice += usize::from(asked == 2);
+            if limit.is_some() {
+                assert!(asked <= 1, "asked {asked} times in one event");
+                return Ok(());
+            }
+            assert!(asked <= 2, "asked {asked} times in one event");
+            if ack.replan_seq.is_some() && s.reserve_m() > 0.0 {
+                let b = s.building();
+                let to_end = replan::distances_from(b, s.tracker().end());
+                let ahead: Vec<usize> = s
+                    .route_ahead()
+                    .iter()
+                    .filter_map(|w| b.vertex_index(&w.vertex))
+                    .collect();
+                let (origin, left) = s.tracker().replan_origin(b).expect("origin");
+                let home = to_end[origin];
+                let farthest = ahead.iter().map(|&v| to_end[v]).fold(home, f64::max);
+                // At most what is left beyond the way home.
+                let need = s.deviation_reserve(farthest, &to_end).min(left - home);
+                assert!(need <= s.reserve_m() + 1e-9, "{need} > {}", s.reserve_m());
+                covered += 1;
+            }
+            Ok(())
+        })
+        .expect("sim");
+        assert!(sum.replans >= 2, "{sum:?}");
+        if limit.is_none() {
+            assert!(covered >= 1, "no replan kept a reserve: {sum:?}");
+            assert!(twice >= 1, "no replan planned twice: {sum:?}");
         }
-        Ok(())
-    })
-    .expect("sim");
-    assert!(sum.replans >= 2, "{sum:?}");
-    assert!(covered >= 1, "no replan kept a reserve: {sum:?}");
-    assert!(twice >= 1, "no replan planned twice: {sum:?}");
+    }
 }
