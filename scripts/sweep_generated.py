@@ -21,7 +21,9 @@ refusal for memory is printed as such. The last two lines name the folder that k
 buildings and count the flagged rows.
 Needs the release binary (TRAILPRINT_BIN, else target/release/trailprint).
 """
-import json, math, os, queue, random, subprocess, sys, tempfile, threading, time
+import json, os, random, subprocess, sys, tempfile, time
+
+from sweep_common import on_two_cores, total_length
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release", "trailprint")
@@ -67,9 +69,7 @@ def main():
                            "--pilot", str(radio_rng.choice([8, 12, 20, 35, 60]))] if vary_radio else []),
                        check=True, capture_output=True)
         b = json.load(open(path))
-        pos = {v["id"]: (v["x"], v["y"]) for v in b["vertices"]}
-        total = sum(e.get("length", math.hypot(pos[e["a"]][0] - pos[e["b"]][0], pos[e["a"]][1] - pos[e["b"]][1]))
-                    for e in b["edges"])
+        total = total_length(b)
         ids = [v["id"] for v in b["vertices"]]
         if small and len(ids) > 100:
             continue
@@ -92,24 +92,8 @@ def main():
         return dict(u=d["utility_nats"], length=d["length_m"], wall=wall,
                     reversals=reversals(path, d["walk"]))
 
-    todo = queue.Queue()
-    for j in jobs:
-        todo.put(j)
-    results = []
-
-    def worker(core):
-        while True:
-            try:
-                j = todo.get_nowait()
-            except queue.Empty:
-                return
-            results.append((j, plan(j, "auto", core), plan(j, "coverage", core)))
-
-    threads = [threading.Thread(target=worker, args=(c,)) for c in (0, 1)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    results = [(j, auto, coverage) for j, (auto, coverage) in
+               on_two_cores(jobs, lambda j, core: (plan(j, "auto", core), plan(j, "coverage", core)))]
     flagged = 0
     refused = 0
     for j, a, c in sorted(results, key=lambda r: (r[0][0], r[0][5], r[0][6])):

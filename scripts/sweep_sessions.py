@@ -14,17 +14,14 @@ budget, or replans slower than 1.3 s (auto's 1 s replan limit plus set-up) on a 
 of more than 200 vertices. Needs the release binary (TRAILPRINT_BIN, else
 target/release/trailprint) and Python's sqlite3 (the replan times are the plans' own).
 """
-import json, math, os, queue, random, sqlite3, subprocess, sys, tempfile, threading, time
+import json, os, random, sqlite3, subprocess, sys, tempfile, time
+
+from sweep_common import on_two_cores, total_length
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("TRAILPRINT_BIN") or os.path.join(ROOT, "target", "release", "trailprint")
 # Who walks, the chance of a wrong turn at a vertex, and the budget's share of the edges.
 SURVEYORS = (("human", 0.1, 0.5), ("robot", 0.05, 0.25))
-
-
-def total_length(b):
-    pos = {v["id"]: (v["x"], v["y"]) for v in b["vertices"]}
-    return sum(e.get("length", math.dist(pos[e["a"]], pos[e["b"]])) for e in b["edges"])
 
 
 def simulate(job, seed, tmp, core):
@@ -61,24 +58,7 @@ def main():
         for model, deviate, share in SURVEYORS:
             jobs.append((name, path, len(b["vertices"]), start, model, deviate, share * total_length(b)))
     tmp = tempfile.mkdtemp()
-    todo = queue.Queue()
-    for j in jobs:
-        todo.put(j)
-    results = []
-
-    def worker(core):
-        while True:
-            try:
-                j = todo.get_nowait()
-            except queue.Empty:
-                return
-            results.append((j, simulate(j, seed, tmp, core)))
-
-    threads = [threading.Thread(target=worker, args=(c,)) for c in (0, 1)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    results = on_two_cores(jobs, lambda j, core: simulate(j, seed, tmp, core))
     flagged = 0
     for j, v in sorted(results, key=lambda r: (r[0][0], r[0][4])):
         name, _, nv, start, model, _, budget = j
